@@ -1,0 +1,129 @@
+// FileReader: one large buffer over stdio, with every overrun turned into a FormatError.
+#include "file_reader.h"
+
+#include <cerrno>
+#include <cstring>
+
+namespace tw {
+
+FileReader::FileReader(const std::filesystem::path& path, size_t buffer_bytes)
+    : name_(path.string()), buffer_(buffer_bytes < 4096 ? 4096 : buffer_bytes) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw FormatError(name_, "is a directory");
+  file_ = std::fopen(name_.c_str(), "rb");
+  if (!file_) throw FormatError(name_, std::string("cannot open: ") + std::strerror(errno));
+  if (std::fseek(file_, 0, SEEK_END) != 0) {
+    std::fclose(file_);
+    throw FormatError(name_, "cannot seek");
+  }
+  long end = std::ftell(file_);
+  std::fseek(file_, 0, SEEK_SET);
+  size_ = end < 0 ? 0 : static_cast<uint64_t>(end);
+  std::setvbuf(file_, nullptr, _IONBF, 0);  // we buffer ourselves
+}
+
+FileReader::~FileReader() {
+  if (file_) std::fclose(file_);
+}
+
+void FileReader::refill() {
+  // Move the unconsumed tail to the front, then fill the rest.
+  size_t tail = end_ - begin_;
+  if (tail && begin_) std::memmove(buffer_.data(), buffer_.data() + begin_, tail);
+  begin_ = 0;
+  end_ = tail;
+  size_t got = std::fread(buffer_.data() + end_, 1, buffer_.size() - end_, file_);
+  if (got == 0 && std::ferror(file_)) fail("read error");
+  end_ += got;
+}
+
+void FileReader::read(void* out, size_t bytes) {
+  if (bytes > remaining()) fail("unexpected end of file (needed " + std::to_string(bytes) +
+                                " bytes, " + std::to_string(remaining()) + " left)");
+  char* dst = static_cast<char*>(out);
+  while (bytes > 0) {
+    if (begin_ == end_) {
+      // Large reads bypass the buffer.
+      if (bytes >= buffer_.size()) {
+        size_t got = std::fread(dst, 1, bytes, file_);
+        offset_ += got;
+        if (got != bytes) fail("read error");
+        return;
+      }
+      refill();
+      if (begin_ == end_) fail("unexpected end of file");
+    }
+    size_t n = std::min(bytes, end_ - begin_);
+    std::memcpy(dst, buffer_.data() + begin_, n);
+    begin_ += n;
+    offset_ += n;
+    dst += n;
+    bytes -= n;
+  }
+}
+
+void FileReader::skip(uint64_t bytes) {
+  if (bytes > remaining()) fail("unexpected end of file (skipping " + std::to_string(bytes) +
+                                " bytes, " + std::to_string(remaining()) + " left)");
+  seek(offset_ + bytes);
+}
+
+void FileReader::seek(uint64_t target) {
+  if (target > size_) fail("offset " + std::to_string(target) + " is past the end of the file");
+  // Stay inside the buffer when we can.
+  uint64_t buffer_start = offset_ - begin_;
+  if (target >= buffer_start && target <= buffer_start + end_) {
+    begin_ = static_cast<size_t>(target - buffer_start);
+    offset_ = target;
+    return;
+  }
+  if (std::fseek(file_, static_cast<long>(target), SEEK_SET) != 0) fail("cannot seek");
+  begin_ = end_ = 0;
+  offset_ = target;
+}
+
+std::string_view FileReader::peek(size_t max_bytes) {
+  if (end_ - begin_ < max_bytes && end_ - begin_ < buffer_.size() && !atEnd()) refill();
+  size_t n = std::min(max_bytes, end_ - begin_);
+  return std::string_view(buffer_.data() + begin_, n);
+}
+
+void FileReader::consume(size_t bytes) {
+  if (bytes > end_ - begin_) fail("internal: consumed more than peeked");
+  begin_ += bytes;
+  offset_ += bytes;
+}
+
+bool FileReader::readLine(std::string_view& line) {
+  if (atEnd()) return false;
+  const char* start = buffer_.data() + begin_;
+  const void* nl = std::memchr(start, '\n', end_ - begin_);
+  if (!nl) {
+    refill();
+    start = buffer_.data() + begin_;
+    nl = std::memchr(start, '\n', end_ - begin_);
+    if (!nl && end_ - begin_ == buffer_.size())
+      fail("line " + std::to_string(line_ + 1) + " is longer than " +
+           std::to_string(buffer_.size()) + " bytes");
+  }
+  size_t len = nl ? static_cast<size_t>(static_cast<const char*>(nl) - start) : end_ - begin_;
+  size_t consumed = nl ? len + 1 : len;
+  if (len > 0 && start[len - 1] == '\r') --len;
+  line = std::string_view(start, len);
+  begin_ += consumed;
+  offset_ += consumed;
+  ++line_;
+  return true;
+}
+
+void FileReader::fail(const std::string& reason) const { failAt(offset_, reason); }
+
+void FileReader::failAt(uint64_t offset, const std::string& reason) const {
+  throw FormatError::atByte(name_, offset, reason);
+}
+
+void FileReader::failAtLine(const std::string& reason) const {
+  throw FormatError::atLine(name_, line_, reason);
+}
+
+}  // namespace tw

@@ -1,0 +1,20 @@
+// glTF 2.0 (.gltf with external or embedded buffers) and GLB reader, through tinygltf.
+//
+// tinygltf loads the whole file, which glTF's design requires. Each node that holds a mesh
+// becomes one object, named by the node (or its mesh when the node is unnamed), with the node's
+// accumulated world transform applied: the translation goes to the object's double-precision
+// origin, the rest to its linear part. Triangle primitives are read (indexed or not); points and
+// lines are skipped. Base colour factors become the object colour.
+#pragma once
+
+#include <filesystem>
+
+#include "read_options.h"
+#include "scene_sink.h"
+
+namespace tw {
+
+// Throws FormatError (file, reason; byte offset where tinygltf reports one) on bad input.
+void readGltf(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options = {});
+
+}  // namespace tw

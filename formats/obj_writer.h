@@ -1,0 +1,26 @@
+// Wavefront OBJ writer: one "o" group per object, world-space vertices, tessellating
+// parametrics and NURBS at `tolerance`. Streams straight to disk.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+
+#include "scene_sink.h"
+
+namespace tw {
+
+class ObjWriter : public SceneWriter {
+ public:
+  ObjWriter(const std::filesystem::path& path, float tolerance);
+  ~ObjWriter() override;
+  void onLayer(uint32_t index, const Layer& layer) override;
+  void onObject(const SceneObject& object) override;
+  void finish() override;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace tw

@@ -1,0 +1,51 @@
+// The project database: one record per database key, in SQLite.
+//
+// Objects carry a database key (a plant tag such as "P-1203-A" or "12\"-HC-1001-A1"); review
+// tools look the key up here to show the object's engineering record. The table is
+// `records(db_key TEXT PRIMARY KEY, type, line_number, service, material, nominal_diameter_mm,
+// design_pressure_bar, design_temperature_c, description)`; see docs/project-database.md.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+
+namespace tw {
+
+struct ProjectRecord {
+  std::string db_key;
+  std::string type;         // "pipe", "elbow", "valve", "vessel", "pump", "beam", ...
+  std::string line_number;  // piping line number, empty for non-piping
+  std::string service;      // process service ("hydrocarbon", "sea water", ...)
+  std::string material;     // "CS A106-B", "SS 316L", ...
+  double nominal_diameter_mm = 0.0;
+  double design_pressure_bar = 0.0;
+  double design_temperature_c = 0.0;
+  std::string description;
+};
+
+class ProjectDatabase {
+ public:
+  // Creates (truncating) or opens the database at `path`. Throws std::runtime_error naming the
+  // file and SQLite's message on failure.
+  static ProjectDatabase create(const std::filesystem::path& path);
+  static ProjectDatabase open(const std::filesystem::path& path);  // read-only
+  ~ProjectDatabase();
+  ProjectDatabase(ProjectDatabase&&) noexcept;
+  ProjectDatabase& operator=(ProjectDatabase&&) noexcept;
+
+  // Inserts or replaces a record. Writes are batched in transactions; commit() ends the batch.
+  void put(const ProjectRecord& record);
+  void commit();
+
+  std::optional<ProjectRecord> find(const std::string& db_key) const;
+  uint64_t recordCount() const;
+
+ private:
+  struct State;
+  explicit ProjectDatabase(std::unique_ptr<State> state);
+  std::unique_ptr<State> state_;
+};
+
+}  // namespace tw

@@ -1,0 +1,54 @@
+// Dispatch from file extension to reader.
+#include "scene_io.h"
+
+#include <algorithm>
+#include <cctype>
+#include <string>
+
+#include "format_error.h"
+#include "gltf_reader.h"
+#include "obj_reader.h"
+#include "ply_reader.h"
+#include "stl_reader.h"
+#include "tws_reader.h"
+
+namespace tw {
+
+SceneFormat sceneFormatOf(const std::filesystem::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".tws") return SceneFormat::Tws;
+  if (ext == ".ply") return SceneFormat::Ply;
+  if (ext == ".obj") return SceneFormat::Obj;
+  if (ext == ".stl") return SceneFormat::Stl;
+  if (ext == ".gltf" || ext == ".glb") return SceneFormat::Gltf;
+  return SceneFormat::Unknown;
+}
+
+std::string_view sceneFormatName(SceneFormat format) {
+  switch (format) {
+    case SceneFormat::Tws: return "tws";
+    case SceneFormat::Ply: return "ply";
+    case SceneFormat::Obj: return "obj";
+    case SceneFormat::Stl: return "stl";
+    case SceneFormat::Gltf: return "gltf";
+    case SceneFormat::Unknown: break;
+  }
+  return "unknown";
+}
+
+void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
+  switch (sceneFormatOf(path)) {
+    case SceneFormat::Tws: return readTws(path, sink, options);
+    case SceneFormat::Ply: return readPly(path, sink, options);
+    case SceneFormat::Obj: return readObj(path, sink, options);
+    case SceneFormat::Stl: return readStl(path, sink, options);
+    case SceneFormat::Gltf: return readGltf(path, sink, options);
+    case SceneFormat::Unknown: break;
+  }
+  throw FormatError(path.string(),
+                    "unknown file type (expected .tws, .ply, .obj, .stl, .gltf or .glb)");
+}
+
+}  // namespace tw

@@ -1,0 +1,36 @@
+// Tessellation of parametric primitives and NURBS patch sets at a chordal tolerance.
+//
+// Parametrics stay parametric in the scene; these functions exist for consumers that need
+// triangles (PLY/OBJ export, ray-cast snapshots, reference renders) and for counting the
+// "equivalent triangles" a scene represents. Output is in the geometry's local frame.
+#pragma once
+
+#include <cstdint>
+
+#include "scene.h"
+
+namespace tw {
+
+// The default chordal tolerance, in scene units (metres for generated plants): the largest
+// distance between the true surface and its triangles. 2 mm keeps a 100 mm pipe at 16 segments.
+constexpr float kDefaultChordalTolerance = 0.002f;
+
+// Number of segments an arc of `radius` spanning `sweep_rad` needs so that the chord never
+// deviates from the arc by more than `tolerance`. At least 3 for a full circle, 1 otherwise;
+// capped at kMaxArcSegments so hostile input cannot demand unbounded work.
+constexpr uint32_t kMaxArcSegments = 1024;
+uint32_t arcSegments(float radius, float sweep_rad, float tolerance);
+
+// Appends triangles (positions, normals, indices) to `out`. `out` may already hold geometry;
+// indices are offset accordingly. Colours are left to the caller.
+void tessellatePrimitive(const Primitive& primitive, float tolerance, TriangleMesh& out);
+void tessellateNurbs(const NurbsPatchSet& patches, float tolerance, TriangleMesh& out);
+void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out);
+
+// Exactly the number of triangles the functions above would append, computed without building
+// them (cheap enough to call for every object of a 100M-triangle scene).
+uint64_t primitiveTriangleCount(const Primitive& primitive, float tolerance);
+uint64_t nurbsTriangleCount(const NurbsPatchSet& patches, float tolerance);
+uint64_t triangleCount(const Geometry& geometry, float tolerance);
+
+}  // namespace tw

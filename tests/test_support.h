@@ -1,0 +1,115 @@
+// Shared helpers for the test programs: scratch files, a sink that keeps everything, and the
+// truncate-and-corrupt harness every reader test runs its fixtures through.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "format_error.h"
+#include "scene_sink.h"
+
+namespace tw::test {
+
+inline std::filesystem::path dataDir() { return TW_DATA_DIR; }
+inline std::filesystem::path sharedDataDir() { return TW_SHARED_DATA_DIR; }
+
+// A fresh, empty directory for the running test, removed by nobody (it lives under /tmp).
+inline std::filesystem::path scratchDir() {
+  const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+  std::string name = std::string(info->test_suite_name()) + "." + info->name();
+  for (char& c : name)
+    if (c == '/') c = '_';
+  auto dir = std::filesystem::temp_directory_path() / "terawalk-tests" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+inline void writeFile(const std::filesystem::path& path, const std::string& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+}
+
+inline std::string readFile(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Keeps every layer and object part it receives.
+class CollectingSink : public SceneSink {
+ public:
+  void onLayer(uint32_t index, const Layer& layer) override {
+    if (layers.size() <= index) layers.resize(index + 1);
+    layers[index] = layer;
+  }
+  void onObject(const SceneObject& object) override { objects.push_back(object); }
+
+  uint64_t triangles() const {
+    uint64_t n = 0;
+    for (const auto& o : objects)
+      if (const auto* m = std::get_if<TriangleMesh>(&o.geometry)) n += m->triangleCount();
+    return n;
+  }
+
+  std::vector<Layer> layers;
+  std::vector<SceneObject> objects;
+};
+
+// Discards everything: for damaged-input runs, where only "no crash, clear error" matters.
+class NullSink : public SceneSink {
+ public:
+  void onLayer(uint32_t, const Layer&) override {}
+  void onObject(const SceneObject&) override {}
+};
+
+using ReadFunction = std::function<void(const std::filesystem::path&, SceneSink&)>;
+
+// Feeds damaged copies of `original` (file name `file_name` in a scratch directory) to `read`:
+// every truncation for files up to 4 KiB and about 300 spread over the file otherwise, then
+// `corruptions` copies with a few random bytes overwritten (fixed seed). Each read must either
+// succeed or throw FormatError whose message names the file; any other outcome fails the test.
+// Returns the number of damaged copies that were rejected with a FormatError.
+inline int expectRobustToDamage(const std::string& original, const std::string& file_name,
+                                const ReadFunction& read, int corruptions = 300) {
+  auto path = scratchDir() / file_name;
+  int rejected = 0;
+  auto attempt = [&](const std::string& bytes, const std::string& what) {
+    writeFile(path, bytes);
+    NullSink sink;
+    try {
+      read(path, sink);
+    } catch (const FormatError& e) {
+      ++rejected;
+      EXPECT_NE(std::string(e.what()).find(file_name), std::string::npos)
+          << what << ": error does not name the file: " << e.what();
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << what << ": unexpected exception type: " << e.what();
+    }
+  };
+  size_t step = original.size() <= 4096 ? 1 : original.size() / 300;
+  for (size_t cut = 0; cut < original.size(); cut += step)
+    attempt(original.substr(0, cut), "truncated to " + std::to_string(cut) + " bytes");
+  std::mt19937 rng(12345);
+  for (int i = 0; i < corruptions && !original.empty(); ++i) {
+    std::string bytes = original;
+    int hits = 1 + static_cast<int>(rng() % 4);
+    for (int h = 0; h < hits; ++h) {
+      size_t at = rng() % bytes.size();
+      bytes[at] = static_cast<char>(rng() & 0xff);
+    }
+    attempt(bytes, "corruption " + std::to_string(i));
+  }
+  return rejected;
+}
+
+}  // namespace tw::test
