@@ -1,1 +1,108 @@
+// FileReader: exact reads, bounded lines, and errors that carry the file and offset.
 #include <gtest/gtest.h>
+
+#include <string>
+
+#include "file_reader.h"
+#include "test_support.h"
+
+namespace tw {
+namespace {
+
+TEST(FileReader, ReadsValuesAcrossBufferBoundaries) {
+  auto path = test::scratchDir() / "values.bin";
+  std::string bytes;
+  for (uint32_t i = 0; i < 10000; ++i) bytes.append(reinterpret_cast<const char*>(&i), 4);
+  test::writeFile(path, bytes);
+  FileReader reader(path, 4096);  // small buffer: many refills
+  EXPECT_EQ(reader.size(), 40000u);
+  for (uint32_t i = 0; i < 10000; ++i) ASSERT_EQ(reader.readValue<uint32_t>(), i);
+  EXPECT_TRUE(reader.atEnd());
+}
+
+TEST(FileReader, LargeReadBypassesBufferAndSeekWorks) {
+  auto path = test::scratchDir() / "big.bin";
+  std::string bytes(100000, '\0');
+  for (size_t i = 0; i < bytes.size(); ++i) bytes[i] = static_cast<char>(i * 7);
+  test::writeFile(path, bytes);
+  FileReader reader(path, 4096);
+  std::string out(50000, '\0');
+  reader.skip(10);
+  reader.read(out.data(), out.size());
+  EXPECT_EQ(out, bytes.substr(10, 50000));
+  reader.seek(3);
+  EXPECT_EQ(reader.readValue<char>(), bytes[3]);
+  reader.seek(99999);
+  EXPECT_EQ(reader.readValue<char>(), bytes[99999]);
+}
+
+TEST(FileReader, ReadPastEndNamesFileAndOffset) {
+  auto path = test::scratchDir() / "short.bin";
+  test::writeFile(path, "abcdef");
+  FileReader reader(path);
+  reader.skip(4);
+  try {
+    reader.readValue<uint32_t>();
+    FAIL() << "expected FormatError";
+  } catch (const FormatError& e) {
+    EXPECT_EQ(e.where(), FormatError::Where::Byte);
+    EXPECT_EQ(e.position(), 4u);
+    EXPECT_NE(std::string(e.what()).find("short.bin: byte 4: unexpected end of file"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_THROW(reader.skip(100), FormatError);
+  EXPECT_THROW(reader.seek(7), FormatError);
+}
+
+TEST(FileReader, MissingFileIsAFormatError) {
+  try {
+    FileReader reader(test::scratchDir() / "absent.ply");
+    FAIL();
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("absent.ply: cannot open"), std::string::npos);
+  }
+  EXPECT_THROW(FileReader reader(test::scratchDir()), FormatError);
+}
+
+TEST(FileReader, ReadsLinesWithAnyEnding) {
+  auto path = test::scratchDir() / "lines.txt";
+  test::writeFile(path, "one\r\ntwo\n\nfour");
+  FileReader reader(path, 4096);
+  std::string_view line;
+  std::vector<std::string> lines;
+  while (reader.readLine(line)) lines.emplace_back(line);
+  ASSERT_EQ(lines.size(), 4u);
+  EXPECT_EQ(lines[0], "one");
+  EXPECT_EQ(lines[1], "two");
+  EXPECT_EQ(lines[2], "");
+  EXPECT_EQ(lines[3], "four");
+  EXPECT_EQ(reader.line(), 4u);
+}
+
+TEST(FileReader, ManyLinesAcrossRefills) {
+  auto path = test::scratchDir() / "many.txt";
+  std::string text;
+  for (int i = 0; i < 5000; ++i) text += "line " + std::to_string(i) + "\n";
+  test::writeFile(path, text);
+  FileReader reader(path, 4096);
+  std::string_view line;
+  int n = 0;
+  while (reader.readLine(line)) {
+    ASSERT_EQ(line, "line " + std::to_string(n));
+    ++n;
+  }
+  EXPECT_EQ(n, 5000);
+}
+
+TEST(FileReader, OverlongLineIsRejectedNotBuffered) {
+  auto path = test::scratchDir() / "long.txt";
+  test::writeFile(path, "ok\n" + std::string(10000, 'x') + "\n");
+  FileReader reader(path, 4096);
+  std::string_view line;
+  ASSERT_TRUE(reader.readLine(line));
+  EXPECT_THROW(reader.readLine(line), FormatError);
+}
+
+}  // namespace
+}  // namespace tw

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The main job, end to end, on a fresh Debian 12 machine: install missing packages, build Release,
+# generate a sample plant, inspect it, take ray-cast snapshots and write a report under out/.
+# Grows into preprocess -> headless walkthrough -> report as those stages land.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+triangles=${TERAWALK_DEMO_TRIANGLES:-2000000}
+out=${TERAWALK_OUT:-out}
+
+tools/install_deps.sh
+cmake -S . -B build/release -G Ninja -DCMAKE_BUILD_TYPE=Release -DTERAWALK_BUILD_TESTS=OFF
+cmake --build build/release -j "$(nproc)" --target terawalk
+tw=build/release/tools/terawalk
+
+mkdir -p "$out"
+$tw gen plant --triangles "$triangles" --seed 1 -o "$out/plant.tws" --db "$out/plant.db" \
+  --mesh "$out/plant.ply" | tee "$out/gen.txt"
+$tw info "$out/plant.tws" | tee "$out/info.txt"
+$tw info --json "$out/plant.tws" > "$out/info.json"
+$tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" | tee "$out/snapshot.txt"
+
+{
+  echo "# TeraWalk main job report"
+  echo
+  echo "Generated $(date -u '+%Y-%m-%d %H:%M UTC') on $(nproc) cores."
+  echo
+  echo "## Generation"; echo; echo '```'; cat "$out/gen.txt"; echo '```'
+  echo "## Scene"; echo; echo '```'; cat "$out/info.txt"; echo '```'
+  echo "## Snapshot"; echo; echo '```'; cat "$out/snapshot.txt"; echo '```'
+  echo; echo "![outside](plant-outside.png)"
+} > "$out/report.md"
+echo "Report written to $out/report.md"
