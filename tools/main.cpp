@@ -10,6 +10,7 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", "terawalk 0.1.0");
   app.add_flag("-q,--quiet", global.quiet, "Print no progress");
+  app.fallthrough();  // --quiet may also follow the verb
   tw::registerGenCommand(app, global);
   tw::registerInfoCommand(app, global);
   tw::registerSnapshotCommand(app, global);
