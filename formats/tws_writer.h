@@ -12,15 +12,20 @@
 
 namespace tw {
 
+// Output goes to `path` + ".tmp" and is renamed to `path` by finish(). I/O failures throw
+// std::runtime_error naming the file. Input the reader would reject (a layer declared out of
+// order, an object on an undeclared layer, mesh indices out of range, non-finite values, invalid
+// primitives or NURBS patches, names over 65,535 bytes) throws std::invalid_argument and writes
+// nothing for that call. Meshes whose chunk would exceed 64 MiB are split into parts.
 class TwsWriter : public SceneWriter {
  public:
-  explicit TwsWriter(const std::filesystem::path& path);
+  explicit TwsWriter(const std::filesystem::path& path);  // creates the temporary file
   ~TwsWriter() override;  // without finish(), removes the temporary file
   void onLayer(uint32_t index, const Layer& layer) override;
   void onObject(const SceneObject& object) override;
-  void finish() override;
+  void finish() override;  // writes the END chunk, closes, renames; no calls may follow
 
-  uint64_t bytesWritten() const;
+  uint64_t bytesWritten() const;  // bytes handed to the file so far, header included
 
  private:
   struct State;
