@@ -72,9 +72,11 @@ std::string describeAll(const std::vector<T>& values) {
   std::string out = "[" + std::to_string(values.size()) + "]";
   for (const T& v : values) {
     if constexpr (std::is_arithmetic_v<T>) {
-      out += " " + (std::is_floating_point_v<T> ? num(v) : std::to_string(v));
+      out += ' ';  // appended separately: GCC 12 warns falsely on " " + std::string
+      out += std::is_floating_point_v<T> ? num(v) : std::to_string(v);
     } else {
-      out += " " + describe(v);
+      out += ' ';
+      out += describe(v);
     }
   }
   return out;
