@@ -14,7 +14,9 @@
 
 namespace tw {
 
-// Throws FormatError (file, reason; byte offset where tinygltf reports one) on bad input.
+// Throws FormatError on bad input: (file, byte offset, reason) for a damaged GLB container,
+// (file, reason) otherwise, with tinygltf's own message in the reason. Every accessor, buffer view
+// and index is range-checked before use. See docs/readers-obj-gltf.md for what is supported.
 void readGltf(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options = {});
 
 }  // namespace tw
