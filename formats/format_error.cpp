@@ -6,15 +6,20 @@ namespace {
 
 std::string describe(const std::string& file, FormatError::Where where, uint64_t position,
                      const std::string& reason) {
+  // Built with append() rather than operator+ chains, which GCC 12 flags with a false -Wrestrict.
+  std::string out = file;
   switch (where) {
     case FormatError::Where::Byte:
-      return file + ": byte " + std::to_string(position) + ": " + reason;
+      out.append(": byte ").append(std::to_string(position));
+      break;
     case FormatError::Where::Line:
-      return file + ":" + std::to_string(position) + ": " + reason;
+      out.append(":").append(std::to_string(position));
+      break;
     case FormatError::Where::None:
       break;
   }
-  return file + ": " + reason;
+  out.append(": ").append(reason);
+  return out;
 }
 
 }  // namespace
