@@ -22,7 +22,8 @@ constexpr uint32_t kMaxArcSegments = 1024;
 uint32_t arcSegments(float radius, float sweep_rad, float tolerance);
 
 // Appends triangles (positions, normals, indices) to `out`. `out` may already hold geometry;
-// indices are offset accordingly. Colours are left to the caller.
+// indices are offset accordingly. Colours are left to the caller. Normals are appended when `out`
+// is empty or has one normal per position; positions without normals stay without normals.
 void tessellatePrimitive(const Primitive& primitive, float tolerance, TriangleMesh& out);
 void tessellateNurbs(const NurbsPatchSet& patches, float tolerance, TriangleMesh& out);
 void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out);
