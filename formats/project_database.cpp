@@ -1,1 +1,184 @@
-// placeholder
+// The SQLite-backed project database: one `records` row per database key.
+//
+// Writes go through one prepared INSERT OR REPLACE statement inside transactions of
+// kRowsPerTransaction rows, because SQLite commits per statement otherwise (thousands of fsyncs).
+// A database made by create() is scratch output of the generator or an importer, so durability
+// is traded for speed (journal off, no syncs); open() is read-only.
+#include "project_database.h"
+
+#include <sqlite3.h>
+
+#include <stdexcept>
+#include <system_error>
+
+namespace tw {
+namespace {
+
+constexpr uint64_t kRowsPerTransaction = 10'000;
+
+constexpr const char* kCreateSql =
+    "CREATE TABLE records ("
+    "db_key TEXT PRIMARY KEY, type TEXT, line_number TEXT, service TEXT, material TEXT, "
+    "nominal_diameter_mm REAL, design_pressure_bar REAL, design_temperature_c REAL, "
+    "description TEXT)";
+constexpr const char* kInsertSql =
+    "INSERT OR REPLACE INTO records (db_key, type, line_number, service, material, "
+    "nominal_diameter_mm, design_pressure_bar, design_temperature_c, description) "
+    "VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9)";
+constexpr const char* kFindSql =
+    "SELECT db_key, type, line_number, service, material, nominal_diameter_mm, "
+    "design_pressure_bar, design_temperature_c, description FROM records WHERE db_key = ?1";
+constexpr const char* kCountSql = "SELECT COUNT(*) FROM records";
+
+std::string columnText(sqlite3_stmt* stmt, int column) {
+  const unsigned char* text = sqlite3_column_text(stmt, column);
+  if (!text) return {};
+  return std::string(reinterpret_cast<const char*>(text),
+                     static_cast<size_t>(sqlite3_column_bytes(stmt, column)));
+}
+
+}  // namespace
+
+struct ProjectDatabase::State {
+  std::string path;
+  sqlite3* db = nullptr;
+  sqlite3_stmt* insert = nullptr;
+  sqlite3_stmt* find = nullptr;
+  sqlite3_stmt* count = nullptr;
+  bool in_transaction = false;
+  uint64_t pending_rows = 0;
+
+  ~State() {
+    // A destructor cannot report errors: an open batch is committed on a best-effort basis so
+    // that a caller who forgot commit() still gets its rows.
+    if (in_transaction && db) sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
+    sqlite3_finalize(insert);
+    sqlite3_finalize(find);
+    sqlite3_finalize(count);
+    sqlite3_close(db);
+  }
+
+  [[noreturn]] void fail(const std::string& what) const {
+    std::string message = path + ": " + what;
+    if (db) message += ": " + std::string(sqlite3_errmsg(db));
+    throw std::runtime_error(message);
+  }
+  void check(int rc, const char* what) const {
+    if (rc != SQLITE_OK && rc != SQLITE_DONE && rc != SQLITE_ROW) fail(what);
+  }
+  void exec(const char* sql) { check(sqlite3_exec(db, sql, nullptr, nullptr, nullptr), sql); }
+  sqlite3_stmt* prepare(const char* sql) {
+    sqlite3_stmt* stmt = nullptr;
+    check(sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr), "cannot prepare statement");
+    return stmt;
+  }
+};
+
+ProjectDatabase::ProjectDatabase(std::unique_ptr<State> state) : state_(std::move(state)) {}
+ProjectDatabase::~ProjectDatabase() = default;
+ProjectDatabase::ProjectDatabase(ProjectDatabase&&) noexcept = default;
+ProjectDatabase& ProjectDatabase::operator=(ProjectDatabase&&) noexcept = default;
+
+ProjectDatabase ProjectDatabase::create(const std::filesystem::path& path) {
+  auto state = std::make_unique<State>();
+  state->path = path.string();
+  std::error_code ec;
+  std::filesystem::remove(path, ec);
+  if (ec) throw std::runtime_error(state->path + ": cannot remove existing file: " + ec.message());
+  int rc = sqlite3_open_v2(state->path.c_str(), &state->db,
+                           SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE, nullptr);
+  if (rc != SQLITE_OK) state->fail("cannot create database");
+  state->exec("PRAGMA journal_mode=OFF");
+  state->exec("PRAGMA synchronous=OFF");
+  state->exec(kCreateSql);
+  state->insert = state->prepare(kInsertSql);
+  state->find = state->prepare(kFindSql);
+  state->count = state->prepare(kCountSql);
+  return ProjectDatabase(std::move(state));
+}
+
+ProjectDatabase ProjectDatabase::open(const std::filesystem::path& path) {
+  auto state = std::make_unique<State>();
+  state->path = path.string();
+  int rc = sqlite3_open_v2(state->path.c_str(), &state->db, SQLITE_OPEN_READONLY, nullptr);
+  if (rc != SQLITE_OK) state->fail("cannot open database");
+  // Opening is lazy in SQLite: preparing against the table is what proves the file is a
+  // database holding our schema.
+  state->find = state->prepare(kFindSql);
+  state->count = state->prepare(kCountSql);
+  return ProjectDatabase(std::move(state));
+}
+
+void ProjectDatabase::put(const ProjectRecord& record) {
+  State& s = *state_;
+  if (!s.insert) s.fail("database is read-only");
+  if (!s.in_transaction) {
+    s.exec("BEGIN");
+    s.in_transaction = true;
+  }
+  sqlite3_stmt* stmt = s.insert;
+  auto text = [&](int index, const std::string& value) {
+    s.check(sqlite3_bind_text(stmt, index, value.data(), static_cast<int>(value.size()),
+                              SQLITE_TRANSIENT),
+            "cannot bind value");
+  };
+  text(1, record.db_key);
+  text(2, record.type);
+  text(3, record.line_number);
+  text(4, record.service);
+  text(5, record.material);
+  s.check(sqlite3_bind_double(stmt, 6, record.nominal_diameter_mm), "cannot bind value");
+  s.check(sqlite3_bind_double(stmt, 7, record.design_pressure_bar), "cannot bind value");
+  s.check(sqlite3_bind_double(stmt, 8, record.design_temperature_c), "cannot bind value");
+  text(9, record.description);
+  int rc = sqlite3_step(stmt);
+  sqlite3_reset(stmt);
+  if (rc != SQLITE_DONE) s.fail("cannot insert record '" + record.db_key + "'");
+  if (++s.pending_rows >= kRowsPerTransaction) commit();
+}
+
+void ProjectDatabase::commit() {
+  State& s = *state_;
+  if (!s.in_transaction) return;
+  s.in_transaction = false;
+  s.pending_rows = 0;
+  s.exec("COMMIT");
+}
+
+std::optional<ProjectRecord> ProjectDatabase::find(const std::string& db_key) const {
+  State& s = *state_;
+  sqlite3_stmt* stmt = s.find;
+  s.check(sqlite3_bind_text(stmt, 1, db_key.data(), static_cast<int>(db_key.size()),
+                            SQLITE_TRANSIENT),
+          "cannot bind value");
+  int rc = sqlite3_step(stmt);
+  std::optional<ProjectRecord> result;
+  if (rc == SQLITE_ROW) {
+    ProjectRecord r;
+    r.db_key = columnText(stmt, 0);
+    r.type = columnText(stmt, 1);
+    r.line_number = columnText(stmt, 2);
+    r.service = columnText(stmt, 3);
+    r.material = columnText(stmt, 4);
+    r.nominal_diameter_mm = sqlite3_column_double(stmt, 5);
+    r.design_pressure_bar = sqlite3_column_double(stmt, 6);
+    r.design_temperature_c = sqlite3_column_double(stmt, 7);
+    r.description = columnText(stmt, 8);
+    result = std::move(r);
+  }
+  sqlite3_reset(stmt);
+  sqlite3_clear_bindings(stmt);
+  if (rc != SQLITE_ROW && rc != SQLITE_DONE) s.fail("cannot look up '" + db_key + "'");
+  return result;
+}
+
+uint64_t ProjectDatabase::recordCount() const {
+  State& s = *state_;
+  int rc = sqlite3_step(s.count);
+  int64_t n = rc == SQLITE_ROW ? sqlite3_column_int64(s.count, 0) : 0;
+  sqlite3_reset(s.count);
+  if (rc != SQLITE_ROW) s.fail("cannot count records");
+  return static_cast<uint64_t>(n);
+}
+
+}  // namespace tw
