@@ -1,1 +1,127 @@
+// End to end through the `terawalk` executable: the commands a person types, their exit codes,
+// their output, and the counts `info` prints for real and generated models.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "project_database.h"
+#include "test_support.h"
+
+namespace tw {
+namespace {
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;  // stdout and stderr together
+};
+
+RunResult run(const std::string& args) {
+  std::string command = std::string(TW_TERAWALK_EXE) + " " + args + " 2>&1";
+  RunResult result;
+  FILE* pipe = popen(command.c_str(), "r");
+  if (!pipe) return result;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
+  int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+nlohmann::json infoJson(const std::filesystem::path& file) {
+  RunResult r = run("info --json --quiet " + file.string());
+  EXPECT_EQ(r.exit_code, 0) << r.output;
+  return nlohmann::json::parse(r.output);
+}
+
+TEST(Cli, HelpOnEveryVerb) {
+  for (const char* verb : {"", "info ", "gen ", "gen plant ", "snapshot "}) {
+    RunResult r = run(std::string(verb) + "--help");
+    EXPECT_EQ(r.exit_code, 0) << verb << r.output;
+    EXPECT_NE(r.output.find("Usage"), std::string::npos) << verb << r.output;
+  }
+}
+
+TEST(Cli, UnknownVerbFails) {
+  EXPECT_NE(run("frobnicate").exit_code, 0);
+}
+
+TEST(Cli, InfoCountsTheKicadConnector) {
+  auto file = test::sharedDataDir() / "kicad_dsub62.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  nlohmann::json j = infoJson(file);
+  EXPECT_EQ(j["objects"], 648);
+  EXPECT_EQ(j["objects_by_kind"]["mesh"], 648);
+  EXPECT_EQ(j["triangles"]["total"], 94176);
+  EXPECT_EQ(j["format"], "obj");
+}
+
+TEST(Cli, InfoCountsTheBunny) {
+  auto file = test::sharedDataDir() / "stanford-bunny.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  nlohmann::json j = infoJson(file);
+  EXPECT_EQ(j["objects"], 1);
+  EXPECT_EQ(j["triangles"]["total"], 69451);
+}
+
+TEST(Cli, BadInputGivesOneLineErrorNamingTheFile) {
+  auto dir = test::scratchDir();
+  auto bad = dir / "broken.ply";
+  test::writeFile(bad, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n");
+  RunResult r = run("info " + bad.string());
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.output.find("broken.ply"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
+  EXPECT_EQ(std::count(r.output.begin(), r.output.end(), '\n'), 1) << r.output;
+
+  RunResult missing = run("info " + (dir / "absent.obj").string());
+  EXPECT_NE(missing.exit_code, 0);
+}
+
+TEST(Cli, GeneratesAPlantThatInfoCounts) {
+  auto dir = test::scratchDir();
+  auto tws = dir / "plant.tws";
+  auto db = dir / "plant.db";
+  auto ply = dir / "plant.ply";
+  RunResult gen = run("gen plant --quiet --triangles 200000 --seed 3 -o " + tws.string() +
+                      " --db " + db.string() + " --mesh " + ply.string());
+  ASSERT_EQ(gen.exit_code, 0) << gen.output;
+  ASSERT_TRUE(std::filesystem::exists(tws));
+  ASSERT_TRUE(std::filesystem::exists(ply));
+
+  nlohmann::json scene = infoJson(tws);
+  uint64_t total = scene["triangles"]["total"];
+  EXPECT_GT(total, 180000u);
+  EXPECT_LT(total, 220000u);
+  EXPECT_GT(scene["objects_by_kind"]["primitive"].get<uint64_t>(), 100u);
+  EXPECT_GT(scene["objects_by_kind"]["mesh"].get<uint64_t>(), 0u);
+  EXPECT_GT(scene["objects_by_kind"]["nurbs"].get<uint64_t>(), 0u);
+  EXPECT_EQ(scene["objects_with_db_key"], scene["objects"]);
+  EXPECT_GE(scene["layers"].size(), 5u);
+
+  // The PLY holds the same scene tessellated at the same default tolerance.
+  nlohmann::json mesh = infoJson(ply);
+  EXPECT_EQ(mesh["triangles"]["total"].get<uint64_t>(), total);
+
+  ProjectDatabase database = ProjectDatabase::open(db);
+  EXPECT_GT(database.recordCount(), 0u);
+}
+
+TEST(Cli, SnapshotWritesAPng) {
+  auto file = test::sharedDataDir() / "kicad_dsub62.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto png = test::scratchDir() / "kicad.png";
+  RunResult r = run("snapshot --quiet " + file.string() + " --out " + png.string() +
+                    " --width 160 --height 90");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  std::string bytes = test::readFile(png);
+  ASSERT_GT(bytes.size(), 8u);
+  EXPECT_EQ(bytes.substr(1, 3), "PNG");
+}
+
+}  // namespace
+}  // namespace tw
