@@ -111,6 +111,9 @@ void emitDecksWallsAccess(Context& c) {
     for (int iy = 0; iy < kBaysY; ++iy)
       for (int ix = 0; ix < kBaysX; ++ix) {
         if (level > 0 && ix == 0 && iy == 0) continue;  // stair well
+        // The roof is a laydown strip along the outboard edge only; the rest stays open, as on
+        // real topsides, so the top storey's equipment and piping show from above.
+        if (level == c.storeys && level > 0 && iy != (outboard_low_y ? 0 : kBaysY - 1)) continue;
         emitBox(c.out, kLayerDecks, deck_key, format("deck M%u L%u bay %d.%d", c.area, level, ix, iy),
                 c.at(kXs[ix], kYs[iy], z - kPlate), c.at(kXs[ix + 1], kYs[iy + 1], z));
       }
@@ -130,11 +133,13 @@ void emitDecksWallsAccess(Context& c) {
       emitHandrail(c.out, rail_key, c.at(0.2, open_y, z), c.at(31.8, open_y, z));
     }
     if (level == c.storeys) break;
-    // Walls: the outboard face of every storey, and the west end of the lowest one.
+    // Walls: blast walls on the outboard face and the west end of the lowest storey only;
+    // upper storeys are open frames, so the plant reads as a plant from outside while decks
+    // and the low walls still occlude views from inside.
     std::string wall_key = c.tag("WL", level + 1, "wall", "blast and weather walls");
     double wall_y = outboard_low_y ? -0.12 : 22.0;
     double wall_top = z + kStoreyHeightM - kPlate - 0.7;
-    for (int ix = 0; ix < kBaysX; ++ix) {
+    for (int ix = 0; level == 0 && ix < kBaysX; ++ix) {
       // Louvred openings, but never a wall record without a panel.
       if (c.rng.chance(0.2f) && ix != 1) continue;
       emitBox(c.out, kLayerDecks, wall_key, format("wall M%u L%u bay %d", c.area, level, ix),
