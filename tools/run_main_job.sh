@@ -18,7 +18,11 @@ $tw gen plant --triangles "$triangles" --seed 1 -o "$out/plant.tws" --db "$out/p
   --mesh "$out/plant.ply" | tee "$out/gen.txt"
 $tw info "$out/plant.tws" | tee "$out/info.txt"
 $tw info --json "$out/plant.tws" > "$out/info.json"
-$tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" | tee "$out/snapshot.txt"
+$tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" --azimuth 210 --elevation 30 \
+  | tee "$out/snapshot.txt"
+# A view from inside the first module's second storey (modules start at the site origin).
+$tw snapshot "$out/plant.tws" --out "$out/plant-inside.png" --eye 36,-16,13.7 --target 60,-10,13 \
+  --fov 70 | tee -a "$out/snapshot.txt"
 
 {
   echo "# TeraWalk main job report"
@@ -29,5 +33,6 @@ $tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" | tee "$out/snapsho
   echo "## Scene"; echo; echo '```'; cat "$out/info.txt"; echo '```'
   echo "## Snapshot"; echo; echo '```'; cat "$out/snapshot.txt"; echo '```'
   echo; echo "![outside](plant-outside.png)"
+  echo; echo "![inside a deck](plant-inside.png)"
 } > "$out/report.md"
 echo "Report written to $out/report.md"
