@@ -1,13 +1,14 @@
 // FileReader: one large buffer over stdio, with every overrun turned into a FormatError.
 #include "file_reader.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
 namespace tw {
 
 FileReader::FileReader(const std::filesystem::path& path, size_t buffer_bytes)
-    : name_(path.string()), buffer_(buffer_bytes < 4096 ? 4096 : buffer_bytes) {
+    : name_(path.string()) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw FormatError(name_, "is a directory");
   file_ = std::fopen(name_.c_str(), "rb");
@@ -20,6 +21,8 @@ FileReader::FileReader(const std::filesystem::path& path, size_t buffer_bytes)
   std::fseek(file_, 0, SEEK_SET);
   size_ = end < 0 ? 0 : static_cast<uint64_t>(end);
   std::setvbuf(file_, nullptr, _IONBF, 0);  // we buffer ourselves
+  // Never more buffer than the file needs: damage tests and small inputs open thousands of files.
+  buffer_.resize(std::max<uint64_t>(4096, std::min<uint64_t>(buffer_bytes, size_ + 1)));
 }
 
 FileReader::~FileReader() {

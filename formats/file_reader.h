@@ -21,7 +21,8 @@ class FileReader {
  public:
   static constexpr size_t kDefaultBufferBytes = size_t{1} << 20;
 
-  // Opens `path`; throws FormatError if it cannot be opened.
+  // Opens `path`; throws FormatError if it cannot be opened. The buffer is `buffer_bytes`, or
+  // less for a file smaller than that.
   explicit FileReader(const std::filesystem::path& path, size_t buffer_bytes = kDefaultBufferBytes);
   ~FileReader();
   FileReader(const FileReader&) = delete;

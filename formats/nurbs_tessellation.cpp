@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "nurbs.h"
+#include "position_key.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -320,18 +321,6 @@ void reserveMore(std::vector<T>& v, uint64_t extra) {
   if (need > v.capacity()) v.reserve(static_cast<size_t>(std::max<uint64_t>(need, 2 * uint64_t{v.capacity()})));
 }
 
-struct PositionKey {
-  uint32_t x, y, z;
-  bool operator==(const PositionKey&) const = default;
-};
-struct PositionHash {
-  size_t operator()(const PositionKey& k) const {
-    uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) + k.y * 0xBF58476D1CE4E5B9ull;
-    h ^= (h >> 31) + k.z * 0x94D049BB133111EBull;
-    return static_cast<size_t>(h ^ (h >> 32));
-  }
-};
 
 // Where the floats of a shared border cannot agree bit for bit (knot vectors that only match up
 // to rounding, unclamped borders), the two sides still land within a few ulps of each other. Border
@@ -350,8 +339,7 @@ class SetBuilder {
   // A border vertex: one per distinct position in the set; normals of the patches meeting there
   // are averaged.
   uint32_t borderVertex(const glm::vec3& p, const glm::vec3& n) {
-    const PositionKey key{std::bit_cast<uint32_t>(p.x + 0.0f), std::bit_cast<uint32_t>(p.y + 0.0f),
-                          std::bit_cast<uint32_t>(p.z + 0.0f)};
+    const PositionKey key = positionKeyOf(p);
     if (const auto it = exact_.find(key); it != exact_.end()) return reuse(it->second, n);
     CellKey cell;
     const bool gridded = cellOf(p, cell);

@@ -147,7 +147,8 @@ class ObjParser {
     if (keyword == "mtllib") return loadMaterials(trimmed(line));
     if (keyword == "o") return startObject({});
     if (keyword == "g") return startObject({});
-    if (keyword == "f" || keyword == "v") in_.failAtLine("'" + std::string(keyword) + "' without data");
+    if (keyword == "f") in_.failAtLine("'f' without data");
+    if (keyword == "v") in_.failAtLine("'v' without data");
     // Anything else (s, l, p, vp, curv, surf, ...) is ignored on purpose.
   }
 

@@ -777,11 +777,7 @@ class PlyParser {
 }  // namespace
 
 void readPly(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
-  // Small files get a small buffer: damage tests open thousands of them.
-  std::error_code ec;
-  uint64_t size = std::filesystem::file_size(path, ec);
-  FileReader reader(path,
-                    ec ? kReaderBufferBytes : std::min<uint64_t>(size + 1, kReaderBufferBytes));
+  FileReader reader(path, kReaderBufferBytes);  // sized down to small files by FileReader
   beginStage(options.progress, "read", reader.size());
   Header header = parseHeader(reader);
   checkCounts(reader, header);

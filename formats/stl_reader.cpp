@@ -215,11 +215,7 @@ void readAscii(FileReader& reader, const std::string& stem, SceneSink& sink,
 }  // namespace
 
 void readStl(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
-  // Small files get a small buffer: damage tests open thousands of them.
-  std::error_code ec;
-  uint64_t size = std::filesystem::file_size(path, ec);
-  FileReader reader(path,
-                    ec ? kReaderBufferBytes : std::min<uint64_t>(size + 1, kReaderBufferBytes));
+  FileReader reader(path, kReaderBufferBytes);  // sized down to small files by FileReader
   beginStage(options.progress, "read", reader.size());
   const std::string stem = path.stem().string();
   bool binary = false;

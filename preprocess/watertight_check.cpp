@@ -10,29 +10,14 @@
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include "position_key.h"
+
 namespace tw {
 namespace {
 
 using HalfEdgeMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
-struct PositionKey {
-  uint32_t x, y, z;
-  bool operator==(const PositionKey&) const = default;
-};
-struct PositionHash {
-  size_t operator()(const PositionKey& k) const {
-    uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) + k.y * 0xBF58476D1CE4E5B9ull;
-    h ^= (h >> 31) + k.z * 0x94D049BB133111EBull;
-    return static_cast<size_t>(h ^ (h >> 32));
-  }
-};
 
-// +0.0f turns -0.0f into +0.0f, so the two zeros weld.
-PositionKey keyOf(const glm::vec3& p) {
-  return {std::bit_cast<uint32_t>(p.x + 0.0f), std::bit_cast<uint32_t>(p.y + 0.0f),
-          std::bit_cast<uint32_t>(p.z + 0.0f)};
-}
 
 // Silences OpenMesh's complaints about refused faces while checks run: refusing them is the
 // expected outcome on a broken mesh, and the report counts them. Reference-counted so concurrent
@@ -72,7 +57,7 @@ MeshTopologyReport checkWatertight(const TriangleMesh& mesh) {
   std::vector<glm::vec3> points;
   auto weld = [&](uint32_t index) {
     if (remap[index] == UINT32_MAX) {
-      const auto [it, inserted] = welded.try_emplace(keyOf(mesh.positions[index]), static_cast<uint32_t>(points.size()));
+      const auto [it, inserted] = welded.try_emplace(positionKeyOf(mesh.positions[index]), static_cast<uint32_t>(points.size()));
       if (inserted) points.push_back(mesh.positions[index]);
       remap[index] = it->second;
     }

@@ -72,7 +72,7 @@ TEST(Cli, BadInputGivesOneLineErrorNamingTheFile) {
   auto dir = test::scratchDir();
   auto bad = dir / "broken.ply";
   test::writeFile(bad, "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n");
-  RunResult r = run("info " + bad.string());
+  RunResult r = run("info --quiet " + bad.string());
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find("broken.ply"), std::string::npos) << r.output;
   EXPECT_NE(r.output.find("error"), std::string::npos) << r.output;
