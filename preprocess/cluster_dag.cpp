@@ -1,0 +1,701 @@
+// Level-by-level LOD DAG builder: METIS grouping, locked-border simplification with a checked
+// topology-free fallback, re-clustering, errors and bounds. See cluster_dag.h for the contract.
+#include "cluster_dag.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <meshoptimizer.h>
+#include <metis.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "clusterize.h"
+
+namespace tw {
+
+namespace {
+
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "meshoptimizer reads packed float3");
+
+constexpr uint32_t kUnowned = std::numeric_limits<uint32_t>::max();
+constexpr uint32_t kMulti = kUnowned - 1;  // vertex or edge used by more than one group
+
+uint64_t edgeKey(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+
+using EdgeCounts = std::unordered_map<uint64_t, uint32_t>;
+
+EdgeCounts countEdges(const std::vector<uint32_t>& tris) {
+  EdgeCounts counts;
+  counts.reserve(tris.size() * 2);
+  for (size_t t = 0; t + 2 < tris.size(); t += 3)
+    for (int k = 0; k < 3; ++k) ++counts[edgeKey(tris[t + k], tris[t + (k + 1) % 3])];
+  return counts;
+}
+
+// The crack-freedom rule every candidate must pass: each edge shared with another group keeps its
+// triangle count, and no edge is used exactly once unless it already was.
+//
+// Not checked, on purpose: a new edge joining two locked border vertices. meshopt creates them all
+// the time (an interior vertex collapsing onto the border), so forbidding them stalls
+// simplification. Where a neighbour joins the same two vertices on its side, a cut holds a pinch:
+// an edge with four triangles (two opposite slivers), closed but not manifold. No hole appears.
+bool borderPreserved(const EdgeCounts& in, const std::vector<uint64_t>& shared,
+                     const std::vector<uint32_t>& out_tris) {
+  EdgeCounts out = countEdges(out_tris);
+  for (uint64_t e : shared) {
+    auto it = out.find(e);
+    if ((it == out.end() ? 0u : it->second) != in.at(e)) return false;
+  }
+  for (const auto& [e, count] : out) {
+    if (count != 1) continue;
+    auto it = in.find(e);
+    if (it == in.end() || it->second != 1) return false;
+  }
+  return true;
+}
+
+struct Sphere {
+  glm::vec3 center{0.0f};
+  float radius = 0.0f;
+};
+
+// A sphere enclosing spheres: centred on their bounding box, radius to the farthest one.
+Sphere enclose(const std::vector<Sphere>& spheres) {
+  if (spheres.empty()) return {};
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const Sphere& s : spheres) {
+    lo = glm::min(lo, s.center - glm::vec3(s.radius));
+    hi = glm::max(hi, s.center + glm::vec3(s.radius));
+  }
+  Sphere out;
+  out.center = 0.5f * (lo + hi);
+  for (const Sphere& s : spheres)
+    out.radius = std::max(out.radius, glm::length(s.center - out.center) + s.radius);
+  out.radius *= 1.0f + 1e-6f;  // float rounding must not make a child poke out
+  return out;
+}
+
+// A cluster while the DAG is built: global (welded) vertex indices and one id per triangle.
+struct WorkCluster {
+  std::vector<uint32_t> tris;
+  std::vector<uint32_t> ids;
+};
+
+DagCluster makeCluster(const std::vector<glm::vec3>& positions, const WorkCluster& work) {
+  DagCluster c;
+  std::unordered_map<uint32_t, uint32_t> local;
+  local.reserve(work.tris.size());
+  c.indices.reserve(work.tris.size());
+  for (uint32_t v : work.tris) {
+    auto [it, inserted] = local.emplace(v, static_cast<uint32_t>(c.positions.size()));
+    if (inserted) c.positions.push_back(positions[v]);
+    c.indices.push_back(it->second);
+  }
+  c.triangle_object_ids = work.ids;
+  c.box_min = glm::vec3(INFINITY);
+  c.box_max = glm::vec3(-INFINITY);
+  for (const glm::vec3& p : c.positions) {
+    c.box_min = glm::min(c.box_min, p);
+    c.box_max = glm::max(c.box_max, p);
+  }
+  c.sphere_center = 0.5f * (c.box_min + c.box_max);
+  for (const glm::vec3& p : c.positions)
+    c.sphere_radius = std::max(c.sphere_radius, glm::length(p - c.sphere_center));
+  c.sphere_radius *= 1.0f + 1e-6f;
+  c.lod_center = c.parent_lod_center = c.sphere_center;
+  c.lod_radius = c.parent_lod_radius = c.sphere_radius;
+  return c;
+}
+
+// Per vertex: the most frequent object id among the triangles using it (ties: the smaller id).
+std::vector<uint32_t> vertexObjectIds(const std::vector<uint32_t>& tris,
+                                      const std::vector<uint32_t>& ids, size_t vertex_count) {
+  std::vector<uint64_t> pairs;
+  pairs.reserve(tris.size());
+  for (size_t i = 0; i < tris.size(); ++i) pairs.push_back((uint64_t(tris[i]) << 32) | ids[i / 3]);
+  std::sort(pairs.begin(), pairs.end());
+  std::vector<uint32_t> result(vertex_count, 0);
+  for (size_t i = 0; i < pairs.size();) {
+    uint32_t v = uint32_t(pairs[i] >> 32);
+    size_t best_run = 0;
+    while (i < pairs.size() && uint32_t(pairs[i] >> 32) == v) {
+      size_t j = i;
+      while (j < pairs.size() && pairs[j] == pairs[i]) ++j;
+      if (j - i > best_run) {
+        best_run = j - i;
+        result[v] = uint32_t(pairs[i]);
+      }
+      i = j;
+    }
+  }
+  return result;
+}
+
+std::vector<uint32_t> triangleObjectIds(const std::vector<uint32_t>& tris,
+                                        const std::vector<uint32_t>& vertex_ids) {
+  std::vector<uint32_t> ids(tris.size() / 3);
+  for (size_t t = 0; t < ids.size(); ++t) {
+    uint32_t a = vertex_ids[tris[3 * t]], b = vertex_ids[tris[3 * t + 1]],
+             c = vertex_ids[tris[3 * t + 2]];
+    ids[t] = (b == c && a != b) ? b : a;  // majority of three; all different: the first
+  }
+  return ids;
+}
+
+struct UnionFind {
+  std::vector<uint32_t> parent;
+  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
+  uint32_t find(uint32_t x) {
+    while (parent[x] != x) x = parent[x] = parent[parent[x]];
+    return x;
+  }
+  void unite(uint32_t a, uint32_t b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent[std::max(a, b)] = std::min(a, b);
+  }
+};
+
+// Read-only state shared by the groups of one level attempt.
+struct LevelContext {
+  const std::vector<glm::vec3>& positions;
+  const std::vector<uint32_t>& vertex_owner;      // group id, or kMulti
+  const std::unordered_set<uint64_t>& shared_edges;  // global edges used by several groups
+  const DagOptions& options;
+};
+
+struct GroupOutcome {
+  std::vector<WorkCluster> clusters;
+  float error = 0.0f;  // absolute simplification error, before taking the children's into account
+  GroupMethod method = GroupMethod::PassThrough;
+  uint64_t triangles = 0;
+  bool locked_rejected = false;
+  bool sloppy_rejected = false;
+};
+
+struct Candidate {
+  std::vector<uint32_t> tris;  // local vertex indices
+  std::vector<uint32_t> ids;
+  float error = 0.0f;
+  GroupMethod method = GroupMethod::PassThrough;
+};
+
+void append(std::vector<uint32_t>& to, const std::vector<uint32_t>& from) {
+  to.insert(to.end(), from.begin(), from.end());
+}
+
+GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster>& work,
+                          const std::vector<uint32_t>& members) {
+  const DagOptions& options = ctx.options;
+  GroupOutcome outcome;
+
+  // Gather the group into a compact local vertex buffer: meshoptimizer's cost and its error
+  // scale both depend on the whole vertex buffer it is given.
+  std::vector<uint32_t> gtris, gids;
+  for (uint32_t m : members) {
+    append(gtris, work[m].tris);
+    append(gids, work[m].ids);
+  }
+  std::vector<uint32_t> l2g = gtris;
+  std::sort(l2g.begin(), l2g.end());
+  l2g.erase(std::unique(l2g.begin(), l2g.end()), l2g.end());
+  std::vector<uint32_t> ltris(gtris.size());
+  for (size_t i = 0; i < gtris.size(); ++i)
+    ltris[i] = uint32_t(std::lower_bound(l2g.begin(), l2g.end(), gtris[i]) - l2g.begin());
+  std::vector<glm::vec3> lpos(l2g.size());
+  for (size_t v = 0; v < l2g.size(); ++v) lpos[v] = ctx.positions[l2g[v]];
+  const float* pos = &lpos[0].x;
+  const size_t vcount = lpos.size();
+  const size_t stride = sizeof(glm::vec3);
+  const float scale = meshopt_simplifyScale(pos, vcount, stride);
+  auto isMulti = [&](uint32_t local) { return ctx.vertex_owner[l2g[local]] == kMulti; };
+
+  const EdgeCounts in = countEdges(ltris);
+  std::vector<uint64_t> shared;
+  for (const auto& [e, count] : in) {
+    uint32_t a = uint32_t(e >> 32), b = uint32_t(e);
+    if (isMulti(a) && isMulti(b) && ctx.shared_edges.count(edgeKey(l2g[a], l2g[b])))
+      shared.push_back(e);
+  }
+  const std::vector<uint32_t> vertex_ids = vertexObjectIds(ltris, gids, vcount);
+
+  const size_t n = gids.size();
+  const size_t limit = static_cast<size_t>(options.min_shrink_ratio * double(n));
+  const size_t half_indices = (n / 2) * 3;
+  Candidate best{ltris, gids, 0.0f, GroupMethod::PassThrough};
+  auto consider = [&](Candidate&& c) {
+    if (!c.tris.empty() && c.tris.size() < best.tris.size()) best = std::move(c);
+  };
+
+  // 1. The whole group, border locked.
+  std::vector<uint32_t> out(ltris.size());
+  float err = 0.0f;
+  size_t count = meshopt_simplify(out.data(), ltris.data(), ltris.size(), pos, vcount, stride,
+                                  half_indices, options.max_relative_error,
+                                  meshopt_SimplifyLockBorder, &err);
+  out.resize(count);
+  if (count < ltris.size()) {
+    if (borderPreserved(in, shared, out)) {
+      auto ids = triangleObjectIds(out, vertex_ids);
+      consider({std::move(out), std::move(ids), err * scale, GroupMethod::Locked});
+    } else {
+      outcome.locked_rejected = true;
+    }
+  }
+
+  // 2. Not enough: topology-free simplification, only on free components.
+  if (best.tris.size() / 3 > limit && (options.allow_sloppy || options.allow_drop)) {
+    UnionFind components(vcount);
+    for (size_t i = 0; i < ltris.size(); i += 3) {
+      components.unite(ltris[i], ltris[i + 1]);
+      components.unite(ltris[i], ltris[i + 2]);
+    }
+    std::vector<uint8_t> free_root(vcount, 1);
+    for (uint32_t v = 0; v < vcount; ++v)
+      if (isMulti(v)) free_root[components.find(v)] = 0;
+    std::vector<uint32_t> btris, bids, ftris, fids;
+    for (size_t t = 0; t < n; ++t) {
+      bool is_free = free_root[components.find(ltris[3 * t])];
+      auto& tris = is_free ? ftris : btris;
+      (is_free ? fids : bids).push_back(gids[t]);
+      tris.insert(tris.end(), ltris.begin() + 3 * t, ltris.begin() + 3 * t + 3);
+    }
+
+    if (!ftris.empty()) {
+      // The border part keeps the locked treatment.
+      std::vector<uint32_t> rb = btris, rb_ids = bids;
+      float err_b = 0.0f;
+      if (!btris.empty()) {
+        out.resize(btris.size());
+        count = meshopt_simplify(out.data(), btris.data(), btris.size(), pos, vcount, stride,
+                                 (btris.size() / 6) * 3, options.max_relative_error,
+                                 meshopt_SimplifyLockBorder, &err);
+        out.resize(count);
+        if (count < btris.size() && borderPreserved(in, shared, out)) {
+          rb_ids = triangleObjectIds(out, vertex_ids);
+          rb = std::move(out);
+          err_b = err * scale;
+        }
+      }
+      const size_t nb = rb.size() / 3, nf = ftris.size() / 3;
+      const size_t wanted = n / 2 > nb ? n / 2 - nb : 0;
+      const size_t target_f = std::clamp(wanted, nf / 4, nf / 2);
+      const std::vector<uint64_t> no_shared;  // free components share no edge by definition
+
+      if (options.allow_sloppy) {
+        // Sloppy picks each grid cell's representative among *all* vertices it is given, so it
+        // gets the free components' vertices only: its output must not touch the border part.
+        std::vector<uint32_t> f2l(ftris);
+        std::sort(f2l.begin(), f2l.end());
+        f2l.erase(std::unique(f2l.begin(), f2l.end()), f2l.end());
+        std::vector<uint32_t> flocal(ftris.size());
+        for (size_t i = 0; i < ftris.size(); ++i)
+          flocal[i] = uint32_t(std::lower_bound(f2l.begin(), f2l.end(), ftris[i]) - f2l.begin());
+        std::vector<glm::vec3> fpos(f2l.size());
+        for (size_t v = 0; v < f2l.size(); ++v) fpos[v] = lpos[f2l[v]];
+        std::vector<uint32_t> rf(ftris.size());
+        float err_f = 0.0f;
+        count = meshopt_simplifySloppy(rf.data(), flocal.data(), flocal.size(), &fpos[0].x,
+                                       fpos.size(), stride, target_f * 3,
+                                       options.max_relative_error, &err_f);
+        rf.resize(count);
+        for (uint32_t& v : rf) v = f2l[v];
+        const float f_scale = meshopt_simplifyScale(&fpos[0].x, fpos.size(), stride);
+        if (borderPreserved(in, no_shared, rf)) {
+          Candidate c{rb, rb_ids, std::max(err_b, err_f * f_scale), GroupMethod::Sloppy};
+          append(c.tris, rf);
+          append(c.ids, triangleObjectIds(rf, vertex_ids));
+          consider(std::move(c));
+        } else {
+          outcome.sloppy_rejected = true;
+        }
+      }
+
+      if (best.tris.size() / 3 > limit && options.allow_drop) {
+        // Drop whole free components, smallest first; a vanished part's error is its size.
+        struct Component {
+          float diagonal;
+          uint32_t first_triangle;
+          uint32_t root;
+          uint32_t triangles;
+        };
+        std::unordered_map<uint32_t, size_t> slot;
+        std::vector<Component> parts;
+        std::vector<glm::vec3> lo, hi;
+        for (size_t t = 0; t < nf; ++t) {
+          uint32_t root = components.find(ftris[3 * t]);
+          auto [it, inserted] = slot.emplace(root, parts.size());
+          if (inserted) {
+            parts.push_back({0.0f, uint32_t(t), root, 0});
+            lo.push_back(glm::vec3(INFINITY));
+            hi.push_back(glm::vec3(-INFINITY));
+          }
+          parts[it->second].triangles++;
+          for (int k = 0; k < 3; ++k) {
+            lo[it->second] = glm::min(lo[it->second], lpos[ftris[3 * t + k]]);
+            hi[it->second] = glm::max(hi[it->second], lpos[ftris[3 * t + k]]);
+          }
+        }
+        for (size_t p = 0; p < parts.size(); ++p) parts[p].diagonal = glm::length(hi[p] - lo[p]);
+        std::sort(parts.begin(), parts.end(), [](const Component& a, const Component& b) {
+          return a.diagonal < b.diagonal ||
+                 (a.diagonal == b.diagonal && a.first_triangle < b.first_triangle);
+        });
+        std::unordered_set<uint32_t> dropped;
+        size_t kept = nf;
+        float dropped_error = 0.0f;
+        for (size_t p = 0; p < parts.size() && kept > target_f; ++p) {
+          if (p + 1 == parts.size() && nb == 0) break;  // a group never vanishes entirely
+          dropped.insert(parts[p].root);
+          kept -= parts[p].triangles;
+          dropped_error = std::max(dropped_error, parts[p].diagonal);
+        }
+        Candidate c{rb, rb_ids, std::max(err_b, dropped_error), GroupMethod::Dropped};
+        for (size_t t = 0; t < nf; ++t) {
+          if (dropped.count(components.find(ftris[3 * t]))) continue;
+          c.tris.insert(c.tris.end(), ftris.begin() + 3 * t, ftris.begin() + 3 * t + 3);
+          c.ids.push_back(fids[t]);
+        }
+        consider(std::move(c));
+      }
+    }
+  }
+
+  // 3. Cut the result into clusters again.
+  outcome.error = best.error;
+  outcome.method = best.method;
+  outcome.triangles = best.tris.size() / 3;
+  TriangleClusters split = clusterizeTriangles(lpos, best.tris, options.cluster_size);
+  outcome.clusters.resize(split.clusterCount());
+  for (size_t c = 0; c < split.clusterCount(); ++c) {
+    WorkCluster& wc = outcome.clusters[c];
+    for (uint32_t i = split.offsets[c]; i < split.offsets[c + 1]; ++i) {
+      uint32_t t = split.triangles[i];
+      for (int k = 0; k < 3; ++k) wc.tris.push_back(l2g[best.tris[3 * t + k]]);
+      wc.ids.push_back(best.ids[t]);
+    }
+  }
+  return outcome;
+}
+
+uint32_t morton3(glm::vec3 unit) {
+  auto spread = [](uint32_t x) {
+    x &= 0x3ff;
+    x = (x | (x << 16)) & 0x030000ff;
+    x = (x | (x << 8)) & 0x0300f00f;
+    x = (x | (x << 4)) & 0x030c30c3;
+    x = (x | (x << 2)) & 0x09249249;
+    return x;
+  };
+  auto q = [](float f) { return uint32_t(std::clamp(f, 0.0f, 1.0f) * 1023.0f); };
+  return spread(q(unit.x)) | (spread(q(unit.y)) << 1) | (spread(q(unit.z)) << 2);
+}
+
+// Groups of about group_size clusters: METIS k-way on the cluster adjacency graph. Members of a
+// group are in ascending order; groups in part order (deterministic: METIS runs serially with a
+// fixed seed).
+std::vector<std::vector<uint32_t>> partitionClusters(const std::vector<WorkCluster>& work,
+                                                     const std::vector<glm::vec3>& centers,
+                                                     uint32_t group_size) {
+  const size_t n = work.size();
+  std::vector<std::vector<uint32_t>> groups;
+  if (n <= group_size) {
+    groups.emplace_back(n);
+    std::iota(groups[0].begin(), groups[0].end(), 0u);
+    return groups;
+  }
+
+  // Clusters sharing vertices; weight = number of shared vertices (a proxy for border length).
+  std::vector<uint64_t> vertex_cluster;
+  for (size_t c = 0; c < n; ++c)
+    for (uint32_t v : work[c].tris) vertex_cluster.push_back((uint64_t(v) << 32) | c);
+  std::sort(vertex_cluster.begin(), vertex_cluster.end());
+  vertex_cluster.erase(std::unique(vertex_cluster.begin(), vertex_cluster.end()),
+                       vertex_cluster.end());
+  std::unordered_map<uint64_t, uint32_t> weights;
+  for (size_t i = 0; i < vertex_cluster.size();) {
+    size_t j = i;
+    while (j < vertex_cluster.size() && (vertex_cluster[j] >> 32) == (vertex_cluster[i] >> 32)) ++j;
+    for (size_t a = i; a < j; ++a)
+      for (size_t b = a + 1; b < j; ++b)
+        ++weights[edgeKey(uint32_t(vertex_cluster[a]), uint32_t(vertex_cluster[b]))];
+    i = j;
+  }
+  // Weak links between neighbours in Morton order, so disconnected parts group by proximity.
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const glm::vec3& c : centers) {
+    lo = glm::min(lo, c);
+    hi = glm::max(hi, c);
+  }
+  glm::vec3 extent = glm::max(hi - lo, glm::vec3(1e-30f));
+  std::vector<std::pair<uint32_t, uint32_t>> order(n);
+  for (size_t c = 0; c < n; ++c) order[c] = {morton3((centers[c] - lo) / extent), uint32_t(c)};
+  std::sort(order.begin(), order.end());
+  for (size_t i = 0; i + 1 < n; ++i) {
+    ++weights[edgeKey(order[i].second, order[i + 1].second)];
+    if (i + 2 < n) ++weights[edgeKey(order[i].second, order[i + 2].second)];
+  }
+
+  std::vector<std::pair<uint64_t, uint32_t>> edges(weights.begin(), weights.end());
+  std::sort(edges.begin(), edges.end());
+  std::vector<idx_t> xadj(n + 1, 0);
+  for (const auto& [key, w] : edges) {
+    ++xadj[(key >> 32) + 1];
+    ++xadj[uint32_t(key) + 1];
+  }
+  for (size_t i = 0; i < n; ++i) xadj[i + 1] += xadj[i];
+  const size_t arcs = static_cast<size_t>(xadj[n]);
+  std::vector<idx_t> adjncy(arcs), adjwgt(arcs);
+  std::vector<idx_t> fill(xadj.begin(), xadj.end() - 1);
+  for (const auto& [key, w] : edges) {
+    uint32_t a = uint32_t(key >> 32), b = uint32_t(key);
+    adjncy[size_t(fill[a])] = idx_t(b);
+    adjwgt[size_t(fill[a]++)] = idx_t(w);
+    adjncy[size_t(fill[b])] = idx_t(a);
+    adjwgt[size_t(fill[b]++)] = idx_t(w);
+  }
+  std::vector<idx_t> vwgt(n);
+  for (size_t c = 0; c < n; ++c) vwgt[c] = std::max<idx_t>(1, idx_t(work[c].ids.size()));
+
+  idx_t nvtxs = idx_t(n), ncon = 1, nparts = idx_t((n + group_size - 1) / group_size), edgecut = 0;
+  idx_t metis_options[METIS_NOPTIONS];
+  METIS_SetDefaultOptions(metis_options);
+  metis_options[METIS_OPTION_SEED] = 42;
+  metis_options[METIS_OPTION_NUMBERING] = 0;
+  std::vector<idx_t> part(n, 0);
+  int rc = METIS_PartGraphKway(&nvtxs, &ncon, xadj.data(), adjncy.data(), vwgt.data(), nullptr,
+                               adjwgt.data(), &nparts, nullptr, nullptr, metis_options, &edgecut,
+                               part.data());
+  if (rc != METIS_OK) {
+    // Fallback: runs of group_size clusters in Morton order.
+    for (size_t i = 0; i < n; ++i) part[order[i].second] = idx_t(i / group_size);
+  }
+  groups.resize(size_t(nparts));
+  for (size_t c = 0; c < n; ++c) groups[size_t(part[c])].push_back(uint32_t(c));
+  groups.erase(std::remove_if(groups.begin(), groups.end(), [](const auto& g) { return g.empty(); }),
+               groups.end());
+  return groups;
+}
+
+}  // namespace
+
+ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
+  if (input.indices.size() % 3 != 0)
+    throw std::invalid_argument("buildClusterDag: index count is not a multiple of 3");
+  if (input.triangle_object_ids.size() != input.indices.size() / 3)
+    throw std::invalid_argument("buildClusterDag: need one object id per triangle");
+  if (options.cluster_size == 0 || options.group_size == 0)
+    throw std::invalid_argument("buildClusterDag: cluster_size and group_size must be > 0");
+  for (uint32_t v : input.indices)
+    if (v >= input.positions.size())
+      throw std::invalid_argument("buildClusterDag: index out of range");
+
+  ClusterDag dag;
+  dag.stats.input_triangles = input.indices.size() / 3;
+  if (input.indices.empty()) {
+    dag.stats.root_within_limit = true;
+    return dag;
+  }
+
+  // Weld by exact position: split vertices (normals, uvs) would read as open borders and lock.
+  // meshopt compares bytes, so -0 becomes +0 first.
+  std::vector<glm::vec3> source(input.positions.begin(), input.positions.end());
+  for (glm::vec3& p : source)
+    for (int k = 0; k < 3; ++k)
+      if (p[k] == 0.0f) p[k] = 0.0f;
+  std::vector<uint32_t> remap(source.size());
+  size_t unique = meshopt_generateVertexRemap(remap.data(), input.indices.data(),
+                                              input.indices.size(), &source[0].x, source.size(),
+                                              sizeof(glm::vec3));
+  std::vector<glm::vec3> positions(unique);
+  for (size_t v = 0; v < remap.size(); ++v)
+    if (remap[v] != ~0u) positions[remap[v]] = source[v];
+  source = {};
+  std::vector<uint32_t> tris;
+  std::vector<uint32_t> ids;
+  tris.reserve(input.indices.size());
+  ids.reserve(input.triangle_object_ids.size());
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (size_t t = 0; t < input.triangle_object_ids.size(); ++t) {
+    uint32_t a = remap[input.indices[3 * t]], b = remap[input.indices[3 * t + 1]],
+             c = remap[input.indices[3 * t + 2]];
+    bool finite = true;
+    for (uint32_t v : {a, b, c})
+      for (int k = 0; k < 3; ++k) finite = finite && std::isfinite(positions[v][k]);
+    if (a == b || b == c || a == c || !finite) {
+      ++dag.stats.skipped_triangles;
+      continue;
+    }
+    for (uint32_t v : {a, b, c}) {
+      lo = glm::min(lo, positions[v]);
+      hi = glm::max(hi, positions[v]);
+    }
+    tris.insert(tris.end(), {a, b, c});
+    ids.push_back(input.triangle_object_ids[t]);
+  }
+  if (tris.empty()) return dag;
+  // Strict monotonicity margin: far below any visible error, far above float rounding.
+  const float epsilon = std::max(glm::length(hi - lo) * 1e-6f, 1e-12f);
+
+  // Level 0.
+  std::vector<WorkCluster> current_work;
+  std::vector<uint32_t> current_ids;
+  {
+    TriangleClusters split = clusterizeTriangles(positions, tris, options.cluster_size);
+    for (size_t c = 0; c < split.clusterCount(); ++c) {
+      WorkCluster wc;
+      for (uint32_t i = split.offsets[c]; i < split.offsets[c + 1]; ++i) {
+        uint32_t t = split.triangles[i];
+        wc.tris.insert(wc.tris.end(), tris.begin() + 3 * t, tris.begin() + 3 * t + 3);
+        wc.ids.push_back(ids[t]);
+      }
+      DagCluster dc = makeCluster(positions, wc);
+      current_ids.push_back(uint32_t(dag.clusters.size()));
+      dag.clusters.push_back(std::move(dc));
+      current_work.push_back(std::move(wc));
+    }
+    dag.triangles_per_level.push_back(ids.size());
+    dag.clusters_per_level.push_back(uint32_t(current_ids.size()));
+  }
+
+  std::vector<uint32_t> vertex_owner(positions.size());
+  for (uint32_t level = 0; level + 1 < options.max_levels && current_work.size() > 1; ++level) {
+    const uint64_t level_triangles = dag.triangles_per_level[level];
+    std::vector<glm::vec3> centers;
+    for (uint32_t id : current_ids) centers.push_back(dag.clusters[id].sphere_center);
+
+    std::vector<std::vector<uint32_t>> groups;
+    std::vector<GroupOutcome> outcomes;
+    uint64_t new_triangles = 0;
+    bool shrunk = false;
+    for (uint64_t group_size = options.group_size;; group_size *= 2) {
+      groups = partitionClusters(current_work, centers,
+                                 uint32_t(std::min<uint64_t>(group_size, current_work.size())));
+      // Which vertices and edges are shared between groups: those are the locked borders.
+      std::fill(vertex_owner.begin(), vertex_owner.end(), kUnowned);
+      for (uint32_t g = 0; g < groups.size(); ++g)
+        for (uint32_t m : groups[g])
+          for (uint32_t v : current_work[m].tris)
+            vertex_owner[v] = vertex_owner[v] == kUnowned || vertex_owner[v] == g ? g : kMulti;
+      std::unordered_map<uint64_t, uint32_t> edge_group;
+      for (uint32_t g = 0; g < groups.size(); ++g)
+        for (uint32_t m : groups[g]) {
+          const auto& t = current_work[m].tris;
+          for (size_t i = 0; i < t.size(); i += 3)
+            for (int k = 0; k < 3; ++k) {
+              uint32_t a = t[i + k], b = t[i + (k + 1) % 3];
+              if (vertex_owner[a] != kMulti || vertex_owner[b] != kMulti) continue;
+              auto [it, inserted] = edge_group.emplace(edgeKey(a, b), g);
+              if (!inserted && it->second != g) it->second = kMulti;
+            }
+        }
+      std::unordered_set<uint64_t> shared_edges;
+      for (const auto& [e, g] : edge_group)
+        if (g == kMulti) shared_edges.insert(e);
+
+      LevelContext ctx{positions, vertex_owner, shared_edges, options};
+      outcomes.assign(groups.size(), GroupOutcome{});
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 1),
+                        [&](const tbb::blocked_range<size_t>& range) {
+                          for (size_t g = range.begin(); g != range.end(); ++g)
+                            outcomes[g] = processGroup(ctx, current_work, groups[g]);
+                        });
+      new_triangles = 0;
+      for (const GroupOutcome& o : outcomes) new_triangles += o.triangles;
+      if (new_triangles < level_triangles &&
+          double(new_triangles) <= options.min_shrink_ratio * double(level_triangles)) {
+        shrunk = true;
+        break;
+      }
+      if (groups.size() == 1) break;  // one group: no locked borders left to blame
+      ++dag.stats.level_retries;
+    }
+    if (!shrunk) {
+      // A small level that cannot shrink is the root; a big one takes whatever progress it got.
+      if (level_triangles <= options.max_root_triangles || new_triangles >= level_triangles) break;
+      ++dag.stats.levels_below_shrink;
+    }
+
+    // Assemble level + 1.
+    std::vector<WorkCluster> next_work;
+    std::vector<uint32_t> next_ids;
+    for (size_t g = 0; g < groups.size(); ++g) {
+      GroupOutcome& o = outcomes[g];
+      const uint32_t group_id = uint32_t(dag.groups.size());
+      DagGroup group;
+      group.level = level;
+      group.method = o.method;
+      float max_child_error = 0.0f;
+      std::vector<Sphere> spheres;
+      for (uint32_t m : groups[g]) {
+        const DagCluster& child = dag.clusters[current_ids[m]];
+        group.children.push_back(current_ids[m]);
+        max_child_error = std::max(max_child_error, child.error);
+        spheres.push_back({child.lod_center, child.lod_radius});
+      }
+      float error = std::max(o.error, max_child_error + epsilon);
+      if (!(error > max_child_error)) error = std::nextafter(max_child_error, INFINITY);
+      group.error = error;
+
+      std::vector<DagCluster> made;
+      for (WorkCluster& wc : o.clusters) {
+        made.push_back(makeCluster(positions, wc));
+        spheres.push_back({made.back().sphere_center, made.back().sphere_radius});
+      }
+      Sphere bound = enclose(spheres);
+      group.sphere_center = bound.center;
+      group.sphere_radius = bound.radius;
+      for (uint32_t child : group.children) {
+        DagCluster& c = dag.clusters[child];
+        c.parent_group = group_id;
+        c.parent_error = error;
+        c.parent_lod_center = bound.center;
+        c.parent_lod_radius = bound.radius;
+      }
+      for (size_t c = 0; c < made.size(); ++c) {
+        DagCluster& dc = made[c];
+        dc.level = level + 1;
+        dc.group = group_id;
+        dc.error = error;
+        dc.lod_center = dc.parent_lod_center = bound.center;
+        dc.lod_radius = dc.parent_lod_radius = bound.radius;
+        group.clusters.push_back(uint32_t(dag.clusters.size()));
+        next_ids.push_back(uint32_t(dag.clusters.size()));
+        dag.clusters.push_back(std::move(dc));
+        next_work.push_back(std::move(o.clusters[c]));
+      }
+      switch (o.method) {
+        case GroupMethod::Locked: ++dag.stats.groups_locked; break;
+        case GroupMethod::Sloppy: ++dag.stats.groups_sloppy; break;
+        case GroupMethod::Dropped: ++dag.stats.groups_dropped; break;
+        case GroupMethod::PassThrough: ++dag.stats.groups_pass_through; break;
+      }
+      dag.stats.locked_results_rejected += o.locked_rejected;
+      dag.stats.sloppy_results_rejected += o.sloppy_rejected;
+      dag.groups.push_back(std::move(group));
+    }
+    current_work = std::move(next_work);
+    current_ids = std::move(next_ids);
+    dag.triangles_per_level.push_back(new_triangles);
+    dag.clusters_per_level.push_back(uint32_t(current_ids.size()));
+  }
+  dag.stats.root_within_limit = dag.triangles_per_level.back() <= options.max_root_triangles;
+  return dag;
+}
+
+std::vector<uint32_t> selectCut(const ClusterDag& dag, float tau) {
+  std::vector<uint32_t> cut;
+  for (uint32_t c = 0; c < dag.clusters.size(); ++c)
+    if (dag.clusters[c].error <= tau && tau < dag.clusters[c].parent_error) cut.push_back(c);
+  return cut;
+}
+
+}  // namespace tw

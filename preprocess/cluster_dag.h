@@ -1,0 +1,162 @@
+// The LOD DAG: full-resolution clusters, then groups of neighbouring clusters simplified together
+// with their shared border locked and cut again into clusters, level after level, up to a small
+// root. Any cut chosen by error (see selectCut) is crack-free because a group never changes the
+// edges it shares with the rest of its level.
+//
+// Build, level by level (pure function over buffers; per-group work runs in parallel with TBB and
+// the result does not depend on thread timing):
+//  1. Weld vertices by exact position (simplification only sees positions), drop degenerate
+//     triangles, cut into clusters of at most cluster_size triangles (clusterize.h).
+//  2. Group the level's clusters with METIS_PartGraphKway on the cluster adjacency graph (edge
+//     weight = shared vertices; weak extra edges between clusters neighbouring in Morton order
+//     keep disconnected CAD parts grouped by proximity). A level of <= group_size clusters is
+//     one group (METIS is not called).
+//  3. Simplify each group to half its triangles with meshopt_simplify + meshopt_SimplifyLockBorder.
+//     If that does not reach min_shrink_ratio, the fallback works only on the group's *free*
+//     components (connected components that share no vertex with another group, so nothing
+//     outside the group can crack against them): first meshopt_simplifySloppy on them (given only
+//     their vertices, so its output cannot reach the border part), then, if that is rejected or
+//     not enough, dropping whole free components smallest first (error: the dropped part's
+//     bounding-box diagonal). The rest of the group keeps the locked result.
+//  4. Every candidate result is checked before use: each edge the group shares with another group
+//     must keep its exact triangle count, and no edge may become a boundary edge (used once)
+//     unless it already was one. A rejected candidate falls back to the next; the last resort
+//     is the group unchanged. So a cut never shows a boundary edge the input did not have. (The
+//     check matters: on non-manifold input, or inside sloppy output, meshopt_simplify sees an
+//     edge shared 2 + 2 between groups as interior and collapses it.)
+//  5. If the whole level does not shrink to min_shrink_ratio, it is redone with groups twice as
+//     large (fewer locked borders), up to one group for the level, where every component is free.
+//  6. Stop at one cluster, or when a level cannot shrink and holds <= max_root_triangles. A level
+//     above max_root_triangles that shrinks less than asked is kept (stats.levels_below_shrink);
+//     one that cannot shrink at all ends the build with stats.root_within_limit = false.
+//
+// Errors (object space, same units as the positions): level-0 clusters have error 0. A group's
+// error is max(its simplification error, its children's errors + epsilon), strictly greater than
+// every child's error; the clusters it produces carry it as `error` and its children carry it as
+// `parent_error`. Root clusters have parent_error = +infinity.
+//
+// Screen-space use: project `error` with the lod sphere and `parent_error` with the parent lod
+// sphere, by any measure that grows with the error and shrinks with the distance to the sphere.
+// Siblings share both pairs and a group's sphere encloses its children's, so every group is
+// either wholly replaced or not, and the per-cluster test picks a consistent cut.
+//
+// Object ids: a simplified triangle takes the majority id of its three vertices, where a vertex's
+// id is the most frequent id among the group's input triangles that use it (ties: smaller id).
+// Triangles kept unchanged (pass-through, kept free components) keep their own id.
+//
+// Limitations: (a) components touching another group at a single vertex (no shared edge, e.g. two
+// cone tips welded together) are not locked there; the vertex may move, leaving a gap no edge
+// test sees. (b) Where two neighbouring groups both join the same two border vertices by a new
+// edge (an interior vertex collapsed onto the border on both sides), a cut holds a "pinch": an
+// edge with four triangles, two opposite slivers. The surface stays closed (no boundary edge) but
+// is not a 2-manifold there. Forbidding such edges stalls meshopt, so they are tolerated; tests
+// measure them (a few per cut on smooth meshes). (c) Heavily simplified thin closed parts may
+// fold into double-sided sheets (edges with four triangles): still no boundary edge.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace tw {
+
+// Non-owning view of the input: positions relative to a local origin (float), three indices per
+// triangle, one object id per triangle.
+struct DagInput {
+  std::span<const glm::vec3> positions;
+  std::span<const uint32_t> indices;
+  std::span<const uint32_t> triangle_object_ids;
+};
+
+struct DagOptions {
+  uint32_t cluster_size = 256;       // max triangles per cluster (sensible: 128..1024)
+  uint32_t group_size = 8;           // clusters simplified together (sensible: 4..32)
+  float min_shrink_ratio = 0.6f;     // a group or level "shrinks" when output <= ratio * input
+  uint32_t max_root_triangles = 65536;
+  float max_relative_error = 1.0f;   // meshopt target_error, relative to a group's extent
+  bool allow_sloppy = true;          // meshopt_simplifySloppy on free components
+  bool allow_drop = true;            // drop whole free components, smallest first
+  uint32_t max_levels = 64;
+};
+
+constexpr uint32_t kNoGroup = std::numeric_limits<uint32_t>::max();
+
+struct DagCluster {
+  std::vector<glm::vec3> positions;              // the cluster's own compact vertex list
+  std::vector<uint32_t> indices;                 // three per triangle, into positions
+  std::vector<uint32_t> triangle_object_ids;     // one per triangle
+  uint32_t level = 0;                            // 0 = full resolution
+  uint32_t group = kNoGroup;                     // group that produced it (level 0: none)
+  uint32_t parent_group = kNoGroup;              // group that simplifies it (root: none)
+  float error = 0.0f;                            // object-space error of this cluster
+  float parent_error = std::numeric_limits<float>::infinity();
+  // Geometry bounds, for culling.
+  glm::vec3 sphere_center{0.0f};
+  float sphere_radius = 0.0f;
+  glm::vec3 box_min{0.0f}, box_max{0.0f};
+  // Bounds to project `error` with: the producing group's sphere (level 0: the geometry sphere).
+  // Siblings share it and it contains the children's, so projected errors stay monotone and all
+  // clusters of a group make the same choice.
+  glm::vec3 lod_center{0.0f};
+  float lod_radius = 0.0f;
+  // Bounds to project `parent_error` with: the parent group's sphere (root: same as lod_*).
+  glm::vec3 parent_lod_center{0.0f};
+  float parent_lod_radius = 0.0f;
+
+  uint32_t triangleCount() const { return static_cast<uint32_t>(indices.size() / 3); }
+};
+
+enum class GroupMethod : uint8_t {
+  Locked = 0,       // meshopt_simplify with the border locked
+  Sloppy = 1,       // locked on the border part, meshopt_simplifySloppy on free components
+  Dropped = 2,      // locked on the border part, smallest free components removed
+  PassThrough = 3,  // nothing acceptable: the group's triangles unchanged
+};
+
+struct DagGroup {
+  uint32_t level = 0;               // level of its children
+  std::vector<uint32_t> children;   // clusters of `level` it replaces
+  std::vector<uint32_t> clusters;   // clusters of level + 1 it produced (may be empty if dropped)
+  float error = 0.0f;               // error of `clusters`, parent_error of `children`
+  glm::vec3 sphere_center{0.0f};    // encloses the children's lod spheres and its clusters
+  float sphere_radius = 0.0f;
+  GroupMethod method = GroupMethod::Locked;
+};
+
+struct DagBuildStats {
+  uint64_t input_triangles = 0;
+  uint64_t skipped_triangles = 0;   // degenerate after welding, or non-finite positions
+  uint32_t groups_locked = 0;
+  uint32_t groups_sloppy = 0;
+  uint32_t groups_dropped = 0;
+  uint32_t groups_pass_through = 0;
+  uint32_t locked_results_rejected = 0;  // locked simplify output failed the border check
+  uint32_t sloppy_results_rejected = 0;  // sloppy output failed the boundary check
+  uint32_t level_retries = 0;            // levels redone with larger groups
+  uint32_t levels_below_shrink = 0;      // levels accepted although ratio > min_shrink_ratio
+  bool root_within_limit = true;         // root level holds <= max_root_triangles
+};
+
+struct ClusterDag {
+  std::vector<DagCluster> clusters;              // level by level, level 0 first
+  std::vector<DagGroup> groups;                  // level by level
+  std::vector<uint64_t> triangles_per_level;     // index = level
+  std::vector<uint32_t> clusters_per_level;
+  DagBuildStats stats;
+
+  uint32_t levelCount() const { return static_cast<uint32_t>(triangles_per_level.size()); }
+};
+
+// Builds the DAG. Throws std::invalid_argument if indices.size() is not a multiple of 3, an index
+// is out of range, object ids are not one per triangle, or cluster_size / group_size is 0.
+// An input with no valid triangle gives an empty DAG.
+ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options = {});
+
+// The clusters a runtime with object-space threshold tau would draw: error <= tau < parent_error.
+// For tau >= 0 the selection covers the surface once, without cracks (see the file comment).
+std::vector<uint32_t> selectCut(const ClusterDag& dag, float tau);
+
+}  // namespace tw

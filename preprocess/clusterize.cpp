@@ -1,0 +1,86 @@
+// Recursive median bisection of triangle centroids into balanced clusters (see clusterize.h).
+#include "clusterize.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+namespace tw {
+
+namespace {
+
+struct Splitter {
+  const std::vector<glm::vec3>& centroids;
+  std::vector<uint32_t>& order;
+  std::vector<uint32_t>& offsets;
+  size_t max_triangles;
+
+  // Depth-first, left before right, so clusters are emitted in spatial order.
+  void split(size_t begin, size_t end) {
+    size_t count = end - begin;
+    if (count <= max_triangles) {
+      offsets.push_back(static_cast<uint32_t>(end));
+      return;
+    }
+    // Give each side a whole number of final clusters so sizes stay balanced to one triangle.
+    size_t clusters = (count + max_triangles - 1) / max_triangles;
+    size_t left_clusters = clusters / 2;
+    size_t mid = begin + count * left_clusters / clusters;
+
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    for (size_t i = begin; i < end; ++i) {
+      lo = glm::min(lo, centroids[order[i]]);
+      hi = glm::max(hi, centroids[order[i]]);
+    }
+    glm::vec3 extent = hi - lo;
+    int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+    // Ties broken by triangle index: the result does not depend on the library's nth_element.
+    std::nth_element(order.begin() + static_cast<ptrdiff_t>(begin),
+                     order.begin() + static_cast<ptrdiff_t>(mid),
+                     order.begin() + static_cast<ptrdiff_t>(end), [&](uint32_t a, uint32_t b) {
+                       float ca = centroids[a][axis], cb = centroids[b][axis];
+                       return ca < cb || (ca == cb && a < b);
+                     });
+    split(begin, mid);
+    split(mid, end);
+  }
+};
+
+}  // namespace
+
+TriangleClusters clusterizeTriangles(std::span<const glm::vec3> positions,
+                                     std::span<const uint32_t> indices, uint32_t max_triangles) {
+  if (indices.size() % 3 != 0)
+    throw std::invalid_argument("clusterizeTriangles: index count is not a multiple of 3");
+  if (max_triangles == 0) throw std::invalid_argument("clusterizeTriangles: max_triangles is 0");
+  size_t triangle_count = indices.size() / 3;
+
+  std::vector<glm::vec3> centroids(triangle_count);
+  for (size_t t = 0; t < triangle_count; ++t) {
+    glm::vec3 sum(0.0f);
+    for (int k = 0; k < 3; ++k) {
+      uint32_t v = indices[3 * t + k];
+      if (v >= positions.size())
+        throw std::invalid_argument("clusterizeTriangles: index out of range");
+      sum += positions[v];
+    }
+    glm::vec3 c = sum / 3.0f;
+    // Non-finite centroids would break the comparator's strict weak ordering.
+    for (int a = 0; a < 3; ++a)
+      if (!std::isfinite(c[a])) c[a] = 0.0f;
+    centroids[t] = c;
+  }
+
+  TriangleClusters result;
+  result.triangles.resize(triangle_count);
+  std::iota(result.triangles.begin(), result.triangles.end(), 0u);
+  if (triangle_count == 0) return result;
+  result.offsets.reserve(triangle_count / max_triangles + 2);
+  result.offsets.push_back(0);
+  Splitter splitter{centroids, result.triangles, result.offsets, max_triangles};
+  splitter.split(0, triangle_count);
+  return result;
+}
+
+}  // namespace tw

@@ -1,0 +1,569 @@
+// Tests for clusterize and the LOD DAG: cut consistency (no boundary edge the input did not have,
+// at many thresholds), monotone errors and bounds, shrinking levels, object ids, the CAD fallback
+// (thousands of disconnected boxes), determinism, and the real bunny and KiCad models.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <map>
+#include <random>
+#include <set>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "cluster_dag.h"
+#include "clusterize.h"
+#include "obj_reader.h"
+#include "test_support.h"
+#include "watertight_check.h"
+
+namespace {
+
+using tw::ClusterDag;
+using tw::DagCluster;
+using tw::DagInput;
+using tw::DagOptions;
+
+struct Mesh {
+  std::vector<glm::vec3> positions;
+  std::vector<uint32_t> indices;
+  std::vector<uint32_t> ids;
+
+  DagInput input() const { return {positions, indices, ids}; }
+  size_t triangles() const { return indices.size() / 3; }
+};
+
+Mesh icosphere(int subdivisions, float radius = 1.0f) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  Mesh m;
+  m.positions = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  m.indices = {0, 11, 5, 0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+               4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3, 9, 4, 3, 4,  2, 3, 2, 6, 3,
+               6, 8, 3, 8,  9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+  for (int s = 0; s < subdivisions; ++s) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
+    auto midpoint = [&](uint32_t a, uint32_t b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      m.positions.push_back(0.5f * (m.positions[a] + m.positions[b]));
+      return mid[key] = uint32_t(m.positions.size() - 1);
+    };
+    std::vector<uint32_t> next;
+    for (size_t i = 0; i < m.indices.size(); i += 3) {
+      uint32_t a = m.indices[i], b = m.indices[i + 1], c = m.indices[i + 2];
+      uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
+      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+    }
+    m.indices = std::move(next);
+  }
+  for (auto& p : m.positions) p = glm::normalize(p) * radius;
+  m.ids.assign(m.triangles(), 1);
+  return m;
+}
+
+Mesh torus(uint32_t nu, uint32_t nv, float major = 3.0f, float minor = 1.0f) {
+  Mesh m;
+  for (uint32_t i = 0; i < nu; ++i)
+    for (uint32_t j = 0; j < nv; ++j) {
+      float u = 6.2831853f * float(i) / float(nu), v = 6.2831853f * float(j) / float(nv);
+      float r = major + minor * std::cos(v);
+      m.positions.push_back({r * std::cos(u), r * std::sin(u), minor * std::sin(v)});
+    }
+  for (uint32_t i = 0; i < nu; ++i)
+    for (uint32_t j = 0; j < nv; ++j) {
+      uint32_t a = i * nv + j, b = ((i + 1) % nu) * nv + j, c = ((i + 1) % nu) * nv + (j + 1) % nv,
+               d = i * nv + (j + 1) % nv;
+      m.indices.insert(m.indices.end(), {a, b, c, a, c, d});
+    }
+  m.ids.assign(m.triangles(), 3);
+  return m;
+}
+
+// `count` closed boxes of 12 triangles with their own vertices, scattered in a plant-like volume.
+Mesh scatteredBoxes(uint32_t count, uint32_t seed) {
+  Mesh m;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> where(0.0f, 40.0f), size(0.05f, 0.6f);
+  static const uint32_t kFaces[36] = {0, 2, 1, 0, 3, 2, 4, 5, 6, 4, 6, 7, 0, 1, 5, 0, 5, 4,
+                                      1, 2, 6, 1, 6, 5, 2, 3, 7, 2, 7, 6, 3, 0, 4, 3, 4, 7};
+  for (uint32_t b = 0; b < count; ++b) {
+    glm::vec3 lo(where(rng), where(rng), where(rng) * 0.25f);
+    glm::vec3 hi = lo + glm::vec3(size(rng), size(rng), size(rng));
+    uint32_t base = uint32_t(m.positions.size());
+    m.positions.insert(m.positions.end(), {{lo.x, lo.y, lo.z}, {hi.x, lo.y, lo.z},
+                                           {hi.x, hi.y, lo.z}, {lo.x, hi.y, lo.z},
+                                           {lo.x, lo.y, hi.z}, {hi.x, lo.y, hi.z},
+                                           {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}});
+    for (uint32_t f : kFaces) m.indices.push_back(base + f);
+    for (int t = 0; t < 12; ++t) m.ids.push_back(1000 + b);
+  }
+  return m;
+}
+
+Mesh loadObj(const std::filesystem::path& path) {
+  tw::test::CollectingSink sink;
+  tw::readObj(path, sink);
+  Mesh m;
+  glm::dvec3 origin(0.0);
+  bool first = true;
+  for (const auto& object : sink.objects) {
+    const auto* mesh = std::get_if<tw::TriangleMesh>(&object.geometry);
+    if (!mesh) continue;
+    if (first) origin = object.info.transform.origin;
+    first = false;
+    uint32_t base = uint32_t(m.positions.size());
+    for (const glm::vec3& p : mesh->positions)
+      m.positions.push_back(glm::vec3(object.info.transform.apply(p) - origin));
+    for (uint32_t i : mesh->indices) m.indices.push_back(base + i);
+    for (size_t t = 0; t < mesh->triangleCount(); ++t) m.ids.push_back(object.info.id);
+  }
+  return m;
+}
+
+// Welds positions exactly (-0 == +0) into ids shared by every mesh it sees, so edge sets of
+// the input and of any cut can be compared.
+class Welder {
+ public:
+  uint32_t id(const glm::vec3& p) {
+    Key k{bits(p.x), bits(p.y), bits(p.z)};
+    return map_.emplace(k, uint32_t(map_.size())).first->second;
+  }
+
+ private:
+  struct Key {
+    uint32_t x, y, z;
+    bool operator==(const Key&) const = default;
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      return (size_t(k.x) * 0x9E3779B97F4A7C15ull) ^ (size_t(k.y) * 0xC2B2AE3D27D4EB4Full) ^
+             (size_t(k.z) * 0x165667B19E3779F9ull);
+    }
+  };
+  static uint32_t bits(float f) {
+    if (f == 0.0f) f = 0.0f;
+    uint32_t u;
+    std::memcpy(&u, &f, 4);
+    return u;
+  }
+  std::unordered_map<Key, uint32_t, Hash> map_;
+};
+
+uint64_t edgeKey(uint32_t a, uint32_t b) {
+  if (a > b) std::swap(a, b);
+  return (uint64_t(a) << 32) | b;
+}
+
+struct EdgeCensus {
+  std::unordered_set<uint64_t> boundary;  // welded edges used by exactly one triangle
+  size_t overused = 0;                    // welded edges used by more than two triangles
+};
+
+template <typename ForEachTriangle>
+EdgeCensus countEdges(Welder& welder, ForEachTriangle&& for_each) {
+  std::unordered_map<uint64_t, uint32_t> counts;
+  for_each([&](const glm::vec3& a, const glm::vec3& b, const glm::vec3& c) {
+    uint32_t ia = welder.id(a), ib = welder.id(b), ic = welder.id(c);
+    if (ia == ib || ib == ic || ia == ic) return;
+    ++counts[edgeKey(ia, ib)];
+    ++counts[edgeKey(ib, ic)];
+    ++counts[edgeKey(ic, ia)];
+  });
+  EdgeCensus census;
+  for (const auto& [e, n] : counts) {
+    if (n == 1) census.boundary.insert(e);
+    census.overused += n > 2;
+  }
+  return census;
+}
+
+EdgeCensus meshEdges(Welder& welder, const Mesh& m) {
+  return countEdges(welder, [&](auto&& emit) {
+    for (size_t i = 0; i < m.indices.size(); i += 3)
+      emit(m.positions[m.indices[i]], m.positions[m.indices[i + 1]], m.positions[m.indices[i + 2]]);
+  });
+}
+
+EdgeCensus cutEdges(Welder& welder, const ClusterDag& dag, const std::vector<uint32_t>& cut) {
+  return countEdges(welder, [&](auto&& emit) {
+    for (uint32_t c : cut) {
+      const DagCluster& cl = dag.clusters[c];
+      for (size_t i = 0; i < cl.indices.size(); i += 3)
+        emit(cl.positions[cl.indices[i]], cl.positions[cl.indices[i + 1]],
+             cl.positions[cl.indices[i + 2]]);
+    }
+  });
+}
+
+// Thresholds from 0 to past the root error, plus some group errors exactly (the boundary case).
+std::vector<float> thresholds(const ClusterDag& dag, int steps = 30) {
+  float top = 0.0f;
+  for (const auto& c : dag.clusters) top = std::max(top, c.error);
+  std::vector<float> taus;
+  for (int i = 0; i < steps; ++i) taus.push_back(top * 1.2f * float(i) / float(steps - 1));
+  for (size_t g = 0; g < dag.groups.size(); g += std::max<size_t>(1, dag.groups.size() / 8))
+    taus.push_back(dag.groups[g].error);
+  return taus;
+}
+
+// Every cut: non-empty, and its boundary edges are input boundary edges. Returns how many cuts
+// had exactly the input's boundary; `overused` gets the most over-used edges (more than two
+// triangles) any cut had beyond the input's own.
+// With check_area, each cut's area must stay close to the input's: a cut that drew a region twice
+// (a cluster and its replacement) or not at all would fail it.
+int expectCrackFreeCuts(const ClusterDag& dag, const Mesh& mesh, size_t* overused = nullptr,
+                        bool check_area = false) {
+  Welder welder;
+  EdgeCensus input = meshEdges(welder, mesh);
+  auto area = [](glm::vec3 a, glm::vec3 b, glm::vec3 c) {
+    return 0.5 * double(glm::length(glm::cross(b - a, c - a)));
+  };
+  double input_area = 0.0;
+  for (size_t i = 0; i < mesh.indices.size(); i += 3)
+    input_area += area(mesh.positions[mesh.indices[i]], mesh.positions[mesh.indices[i + 1]],
+                       mesh.positions[mesh.indices[i + 2]]);
+  int exact = 0;
+  size_t most_overused = 0;
+  for (float tau : thresholds(dag)) {
+    auto cut = tw::selectCut(dag, tau);
+    EXPECT_FALSE(cut.empty()) << "tau " << tau;
+    EdgeCensus census = cutEdges(welder, dag, cut);
+    size_t foreign = 0;
+    for (uint64_t e : census.boundary) foreign += !input.boundary.count(e);
+    EXPECT_EQ(foreign, 0u) << "tau " << tau << ": boundary edges the input does not have";
+    exact += census.boundary.size() == input.boundary.size();
+    if (check_area) {
+      double cut_area = 0.0;
+      for (uint32_t c : cut) {
+        const DagCluster& cl = dag.clusters[c];
+        for (size_t i = 0; i < cl.indices.size(); i += 3)
+          cut_area += area(cl.positions[cl.indices[i]], cl.positions[cl.indices[i + 1]],
+                           cl.positions[cl.indices[i + 2]]);
+      }
+      EXPECT_NEAR(cut_area / input_area, 0.9, 0.15) << "tau " << tau;
+    }
+    if (census.overused > input.overused)
+      most_overused = std::max(most_overused, census.overused - input.overused);
+  }
+  if (overused) *overused = most_overused;
+  return exact;
+}
+
+bool sphereContains(glm::vec3 outer_c, float outer_r, glm::vec3 inner_c, float inner_r) {
+  return glm::length(inner_c - outer_c) + inner_r <= outer_r * (1.0f + 1e-5f) + 1e-6f;
+}
+
+// Errors monotone, bounds nested, clusters bounded in size, levels shrinking, root small.
+void expectWellFormed(const ClusterDag& dag, const DagOptions& options, uint64_t input_triangles) {
+  ASSERT_FALSE(dag.clusters.empty());
+  ASSERT_EQ(dag.triangles_per_level[0], input_triangles);
+  for (size_t l = 1; l < dag.triangles_per_level.size(); ++l)
+    EXPECT_LE(double(dag.triangles_per_level[l]),
+              options.min_shrink_ratio * double(dag.triangles_per_level[l - 1]))
+        << "level " << l;
+  EXPECT_LE(dag.triangles_per_level.back(), options.max_root_triangles);
+  EXPECT_TRUE(dag.stats.root_within_limit);
+  std::vector<uint64_t> per_level(dag.levelCount(), 0);
+  for (const DagCluster& c : dag.clusters) {
+    ASSERT_LT(c.level, dag.levelCount());
+    per_level[c.level] += c.triangleCount();
+    EXPECT_LE(c.triangleCount(), options.cluster_size);
+    EXPECT_GT(c.triangleCount(), 0u);
+    EXPECT_EQ(c.triangle_object_ids.size(), c.triangleCount());
+    EXPECT_LT(c.error, c.parent_error);
+    EXPECT_EQ(c.level == 0, c.group == tw::kNoGroup);
+    if (c.level == 0) {
+      EXPECT_EQ(c.error, 0.0f);
+    }
+    if (c.group != tw::kNoGroup) {
+      EXPECT_EQ(dag.groups[c.group].error, c.error);
+    }
+    if (c.parent_group == tw::kNoGroup) {
+      EXPECT_TRUE(std::isinf(c.parent_error));
+      EXPECT_EQ(c.level + 1, dag.levelCount());
+    } else {
+      EXPECT_EQ(dag.groups[c.parent_group].error, c.parent_error);
+    }
+    for (const glm::vec3& p : c.positions) {
+      EXPECT_TRUE(glm::all(glm::lessThanEqual(c.box_min, p)) &&
+                  glm::all(glm::lessThanEqual(p, c.box_max)));
+      EXPECT_TRUE(sphereContains(c.sphere_center, c.sphere_radius, p, 0.0f));
+    }
+    EXPECT_TRUE(sphereContains(c.lod_center, c.lod_radius, c.sphere_center, c.sphere_radius));
+  }
+  EXPECT_EQ(per_level, dag.triangles_per_level);
+  for (const tw::DagGroup& g : dag.groups) {
+    float max_child = 0.0f;
+    for (uint32_t child : g.children) {
+      const DagCluster& c = dag.clusters[child];
+      max_child = std::max(max_child, c.error);
+      EXPECT_EQ(c.level, g.level);
+      EXPECT_TRUE(sphereContains(g.sphere_center, g.sphere_radius, c.lod_center, c.lod_radius));
+      EXPECT_TRUE(sphereContains(g.sphere_center, g.sphere_radius, c.sphere_center, c.sphere_radius));
+    }
+    EXPECT_GT(g.error, max_child);
+    for (uint32_t made : g.clusters)
+      EXPECT_TRUE(sphereContains(g.sphere_center, g.sphere_radius, dag.clusters[made].sphere_center,
+                                 dag.clusters[made].sphere_radius));
+  }
+}
+
+void reportDag(const char* name, const ClusterDag& dag, double seconds) {
+  std::string levels;
+  for (size_t l = 0; l < dag.levelCount(); ++l)
+    levels += (l ? " " : "") + std::to_string(dag.triangles_per_level[l]) + "/" +
+              std::to_string(dag.clusters_per_level[l]);
+  std::string build = seconds < 0.0 ? "" : "build " + std::to_string(seconds) + " s; ";
+  std::printf("[ dag ] %s: %u levels, triangles/clusters per level: %s; %sgroups "
+              "locked %u sloppy %u dropped %u pass-through %u; rejected locked %u sloppy %u; "
+              "retries %u\n",
+              name, dag.levelCount(), levels.c_str(), build.c_str(), dag.stats.groups_locked,
+              dag.stats.groups_sloppy, dag.stats.groups_dropped, dag.stats.groups_pass_through,
+              dag.stats.locked_results_rejected, dag.stats.sloppy_results_rejected,
+              dag.stats.level_retries);
+}
+
+TEST(Clusterize, BalancedCompactClusters) {
+  Mesh m = icosphere(4);  // 5120 triangles
+  auto clusters = tw::clusterizeTriangles(m.positions, m.indices, 300);
+  ASSERT_EQ(clusters.clusterCount(), (m.triangles() + 299) / 300);
+  std::vector<uint32_t> seen(m.triangles(), 0);
+  for (size_t c = 0; c < clusters.clusterCount(); ++c) {
+    uint32_t size = clusters.offsets[c + 1] - clusters.offsets[c];
+    EXPECT_LE(size, 300u);
+    EXPECT_GE(size, m.triangles() / clusters.clusterCount());
+    for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1]; ++i)
+      ++seen[clusters.triangles[i]];
+  }
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](uint32_t n) { return n == 1; }));
+  EXPECT_EQ(tw::clusterizeTriangles(m.positions, {}, 128).clusterCount(), 0u);
+  std::vector<uint32_t> bad = {0, 1, 99999};
+  EXPECT_THROW(tw::clusterizeTriangles(m.positions, bad, 128), std::invalid_argument);
+  EXPECT_THROW(tw::clusterizeTriangles(m.positions, m.indices, 0), std::invalid_argument);
+}
+
+TEST(ClusterDag, IcosphereCutsAreClosedAtEveryThreshold) {
+  Mesh m = icosphere(5);  // 20480 triangles
+  DagOptions options;
+  options.cluster_size = 128;
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  expectWellFormed(dag, options, m.triangles());
+  EXPECT_GE(dag.levelCount(), 5u);
+  EXPECT_EQ(dag.clusters_per_level.back(), 1u);
+  size_t pinches = 0;
+  expectCrackFreeCuts(dag, m, &pinches, true);
+  // Pinch edges (two neighbouring groups joining the same two border vertices) are rare.
+  EXPECT_LE(pinches, 16u);
+  // The half-edge check agrees: cuts have no holes; only pinches are non-manifold (OpenMesh
+  // refuses one face at each, which it then reports as a few boundary edges).
+  for (float tau : {0.0f, dag.groups[dag.groups.size() / 2].error, dag.groups.back().error}) {
+    tw::TriangleMesh cut_mesh;
+    for (uint32_t c : tw::selectCut(dag, tau)) {
+      const DagCluster& cl = dag.clusters[c];
+      uint32_t base = uint32_t(cut_mesh.positions.size());
+      cut_mesh.positions.insert(cut_mesh.positions.end(), cl.positions.begin(), cl.positions.end());
+      for (uint32_t i : cl.indices) cut_mesh.indices.push_back(base + i);
+    }
+    auto report = tw::checkWatertight(cut_mesh);
+    std::printf("[ dag ] icosphere cut at %g: %llu faces, %llu rejected, %llu boundary, %llu "
+                "non-manifold edges\n", tau, (unsigned long long)report.faces,
+                (unsigned long long)report.rejected_faces,
+                (unsigned long long)report.boundary_edges,
+                (unsigned long long)report.non_manifold_edges);
+    if (tau == 0.0f) {
+      EXPECT_TRUE(report.watertight());
+    }
+    EXPECT_LE(report.boundary_edges, 3 * report.rejected_faces);
+    EXPECT_LE(report.rejected_faces + report.non_manifold_edges, 2 * pinches);
+  }
+}
+
+TEST(ClusterDag, TorusCutsAreClosedAtEveryThreshold) {
+  Mesh m = torus(160, 80);  // 25600 triangles
+  DagOptions options;
+  options.cluster_size = 256;
+  options.group_size = 4;
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  expectWellFormed(dag, options, m.triangles());
+  expectCrackFreeCuts(dag, m, nullptr, true);
+}
+
+TEST(ClusterDag, ObjectIdsSurviveEveryLevel) {
+  Mesh m = icosphere(5);
+  for (size_t t = 0; t < m.triangles(); ++t) {
+    float z = m.positions[m.indices[3 * t]].z + m.positions[m.indices[3 * t + 1]].z +
+              m.positions[m.indices[3 * t + 2]].z;
+    m.ids[t] = z > 0.0f ? 7u : 9u;
+  }
+  DagOptions options;
+  options.cluster_size = 128;
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  expectWellFormed(dag, options, m.triangles());
+  std::vector<std::set<uint32_t>> ids_per_level(dag.levelCount());
+  for (const DagCluster& c : dag.clusters)
+    ids_per_level[c.level].insert(c.triangle_object_ids.begin(), c.triangle_object_ids.end());
+  for (uint32_t l = 0; l < dag.levelCount(); ++l)
+    EXPECT_EQ(ids_per_level[l], (std::set<uint32_t>{7u, 9u})) << "level " << l;
+  // Ids stay on their own hemisphere (majority rule): few triangles of the wrong side.
+  for (const DagCluster& c : dag.clusters) {
+    if (c.level + 1 != dag.levelCount()) continue;
+    size_t wrong = 0;
+    for (size_t t = 0; t < c.triangleCount(); ++t) {
+      float z = c.positions[c.indices[3 * t]].z + c.positions[c.indices[3 * t + 1]].z +
+                c.positions[c.indices[3 * t + 2]].z;
+      wrong += (z > 0.0f) != (c.triangle_object_ids[t] == 7u);
+    }
+    EXPECT_LE(wrong * 5, c.triangleCount());
+  }
+}
+
+TEST(ClusterDag, CadLikeDisconnectedBoxesStillShrink) {
+  Mesh m = scatteredBoxes(2000, 7);  // 24000 triangles, 2000 closed parts
+  DagOptions options;
+  options.cluster_size = 256;
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  reportDag("2000 boxes", dag, -1.0);
+  expectWellFormed(dag, options, m.triangles());
+  EXPECT_GT(dag.stats.groups_sloppy + dag.stats.groups_dropped, 0u);
+  EXPECT_EQ(dag.clusters_per_level.back(), 1u);
+  expectCrackFreeCuts(dag, m);
+  std::set<uint32_t> input_ids(m.ids.begin(), m.ids.end());
+  for (const DagCluster& c : dag.clusters)
+    for (uint32_t id : c.triangle_object_ids) ASSERT_TRUE(input_ids.count(id));
+}
+
+TEST(ClusterDag, SloppyFallbackAloneKeepsBoxesClosed) {
+  Mesh m = scatteredBoxes(2000, 11);
+  DagOptions options;
+  options.cluster_size = 256;
+  options.allow_drop = false;  // exercise meshopt_simplifySloppy and its boundary check
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  reportDag("2000 boxes, no drop", dag, -1.0);
+  EXPECT_GT(dag.stats.groups_sloppy, 0u);
+  EXPECT_LE(dag.triangles_per_level.back(), options.max_root_triangles);
+  for (size_t l = 1; l < dag.levelCount(); ++l)
+    EXPECT_LT(dag.triangles_per_level[l], dag.triangles_per_level[l - 1]);
+  expectCrackFreeCuts(dag, m);
+}
+
+TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
+  Mesh m = scatteredBoxes(2000, 13);
+  DagOptions options;
+  options.cluster_size = 256;
+  options.allow_sloppy = false;  // exercise dropping whole free components
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  reportDag("2000 boxes, no sloppy", dag, -1.0);
+  EXPECT_GT(dag.stats.groups_dropped, 0u);
+  expectWellFormed(dag, options, m.triangles());
+  expectCrackFreeCuts(dag, m);
+  // A dropped part's error covers its size: no group error is below the smallest box diagonal.
+  for (const tw::DagGroup& g : dag.groups) {
+    if (g.method == tw::GroupMethod::Dropped) {
+      EXPECT_GT(g.error, 0.05f);
+    }
+  }
+}
+
+TEST(ClusterDag, Deterministic) {
+  Mesh m = scatteredBoxes(500, 3);
+  Mesh s = torus(100, 50);
+  for (const Mesh* mesh : {&m, &s}) {
+    ClusterDag a = tw::buildClusterDag(mesh->input());
+    ClusterDag b = tw::buildClusterDag(mesh->input());
+    ASSERT_EQ(a.clusters.size(), b.clusters.size());
+    ASSERT_EQ(a.groups.size(), b.groups.size());
+    for (size_t c = 0; c < a.clusters.size(); ++c) {
+      EXPECT_EQ(a.clusters[c].indices, b.clusters[c].indices);
+      EXPECT_EQ(a.clusters[c].positions, b.clusters[c].positions);
+      EXPECT_EQ(a.clusters[c].triangle_object_ids, b.clusters[c].triangle_object_ids);
+      EXPECT_EQ(a.clusters[c].error, b.clusters[c].error);
+      EXPECT_EQ(a.clusters[c].parent_group, b.clusters[c].parent_group);
+    }
+  }
+}
+
+TEST(ClusterDag, SplitVerticesAreWelded) {
+  // Unindexed input (three vertices per triangle, some zeros negative): without welding every
+  // edge would be an open, locked border and nothing could simplify.
+  Mesh indexed = icosphere(4);
+  Mesh soup;
+  for (size_t i = 0; i < indexed.indices.size(); ++i) {
+    glm::vec3 p = indexed.positions[indexed.indices[i]];
+    for (int k = 0; k < 3; ++k)
+      if (p[k] == 0.0f && i % 2) p[k] = -0.0f;
+    soup.positions.push_back(p);
+    soup.indices.push_back(uint32_t(i));
+  }
+  soup.ids = indexed.ids;
+  DagOptions options;
+  options.cluster_size = 128;
+  ClusterDag dag = tw::buildClusterDag(soup.input(), options);
+  expectWellFormed(dag, options, soup.triangles());
+  EXPECT_EQ(dag.stats.groups_pass_through, 0u);
+  expectCrackFreeCuts(dag, indexed);
+}
+
+TEST(ClusterDag, SmallAndBadInputs) {
+  // One cluster: a single level, which is the root.
+  Mesh tiny = icosphere(1);
+  ClusterDag dag = tw::buildClusterDag(tiny.input());
+  ASSERT_EQ(dag.levelCount(), 1u);
+  EXPECT_EQ(tw::selectCut(dag, 0.0f).size(), 1u);
+  EXPECT_EQ(tw::selectCut(dag, 1e30f).size(), 1u);
+  // Empty input: empty DAG.
+  Mesh empty;
+  EXPECT_TRUE(tw::buildClusterDag(empty.input()).clusters.empty());
+  // Degenerate triangles are skipped, not fatal.
+  Mesh degenerate = tiny;
+  degenerate.indices.insert(degenerate.indices.end(), {0, 0, 1});
+  degenerate.ids.push_back(1);
+  EXPECT_EQ(tw::buildClusterDag(degenerate.input()).stats.skipped_triangles, 1u);
+  // Caller errors.
+  Mesh bad = tiny;
+  bad.ids.pop_back();
+  EXPECT_THROW(tw::buildClusterDag(bad.input()), std::invalid_argument);
+  bad = tiny;
+  bad.indices[4] = 100000;
+  EXPECT_THROW(tw::buildClusterDag(bad.input()), std::invalid_argument);
+}
+
+TEST(ClusterDag, StanfordBunny) {
+  auto path = tw::test::sharedDataDir() / "stanford-bunny.obj";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << path;
+  Mesh m = loadObj(path);
+  ASSERT_GT(m.triangles(), 60000u);
+  DagOptions options;
+  auto start = std::chrono::steady_clock::now();
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  reportDag("stanford-bunny", dag, seconds);
+  expectWellFormed(dag, options, m.triangles() - dag.stats.skipped_triangles);
+  // Locked borders keep the bunny's own holes exactly: every cut has the input's boundary.
+  size_t overused = 0;
+  int exact = expectCrackFreeCuts(dag, m, &overused, true);
+  std::printf("[ dag ] stanford-bunny: at most %zu more edges with over two triangles in a cut than the input\n",
+              overused);
+  EXPECT_EQ(exact, int(thresholds(dag).size()));
+}
+
+TEST(ClusterDag, KicadConnector) {
+  auto path = tw::test::sharedDataDir() / "kicad_dsub62.obj";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << path;
+  Mesh m = loadObj(path);
+  DagOptions options;
+  auto start = std::chrono::steady_clock::now();
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  reportDag("kicad_dsub62", dag, seconds);
+  expectWellFormed(dag, options, m.triangles() - dag.stats.skipped_triangles);
+  size_t overused = 0;
+  expectCrackFreeCuts(dag, m, &overused);
+  std::printf("[ dag ] kicad_dsub62: at most %zu more edges with over two triangles in a cut than the input\n",
+              overused);
+}
+
+}  // namespace
