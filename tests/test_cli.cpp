@@ -111,6 +111,24 @@ TEST(Cli, GeneratesAPlantThatInfoCounts) {
   EXPECT_GT(database.recordCount(), 0u);
 }
 
+// The 10M-triangle benchmark plant (seed 1) has these exact counts. They change only when the
+// generator changes on purpose; update them then, from `terawalk info --json`.
+TEST(Cli, TenMillionTrianglePlantHasKnownCounts) {
+  auto tws = test::scratchDir() / "plant10M.tws";
+  RunResult gen = run("gen plant --quiet --triangles 10M --seed 1 --no-db -o " + tws.string());
+  ASSERT_EQ(gen.exit_code, 0) << gen.output;
+  nlohmann::json j = infoJson(tws);
+  EXPECT_EQ(j["objects"], 120173);
+  EXPECT_EQ(j["objects_with_db_key"], 120173);
+  EXPECT_EQ(j["objects_by_kind"]["primitive"], 119698);
+  EXPECT_EQ(j["objects_by_kind"]["mesh"], 473);
+  EXPECT_EQ(j["objects_by_kind"]["nurbs"], 2);
+  EXPECT_EQ(j["nurbs_patches"], 356);
+  EXPECT_EQ(j["triangles"]["total"], 9989402);
+  EXPECT_EQ(j["triangles"]["mesh"], 1766624);
+  EXPECT_EQ(j["layers"].size(), 12u);
+}
+
 TEST(Cli, SnapshotWritesAPng) {
   auto file = test::sharedDataDir() / "kicad_dsub62.obj";
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
