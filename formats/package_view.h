@@ -1,0 +1,118 @@
+// PackageView: a read-only memory mapping of a .twk package with every record validated.
+//
+// open() maps the file (POSIX mmap) and checks, before anything is used: magic, version, struct
+// sizes, header checksum, the section table (aligned, inside the file, non-overlapping, sizes
+// matching record counts), the checksum of every table section, and every cross-reference
+// (cluster -> group, page and object range; page -> page data; object -> layer and strings;
+// instance -> object and profile points; layer -> strings) plus the LOD invariants. After a
+// successful open the spans below are safe to index with any index the records contain.
+//
+// Verify::Headers (the default) leaves the page data unread, so opening a package of many GB costs
+// a pass over its tables only; each page's checksum is then checked by readPage when it is loaded.
+// Verify::All also checks the page data checksum, every page checksum, decompresses and decodes
+// every cluster and compares it with its record, and requires the gaps between sections to be
+// zero, so any changed byte is caught (`terawalk verify` uses it).
+//
+// Every failure throws FormatError::atByte(file, offset, reason). The view owns the mapping; it
+// is move-only, and spans it hands out live as long as it does.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <glm/glm.hpp>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "format_error.h"
+#include "package_format.h"
+#include "page_codec.h"
+
+namespace tw {
+
+// XXH3-64 of a header (its header_checksum field read as 0) followed by its section table: the
+// value PackageHeader::header_checksum holds. Exposed for the writer and for tests that patch
+// headers.
+uint64_t packageHeaderChecksum(const pkg::PackageHeader& header,
+                               std::span<const pkg::SectionEntry> table);
+// XXH3-64 (seed 0) of a section's bytes: the value SectionEntry::checksum holds.
+uint64_t packageSectionChecksum(std::span<const uint8_t> bytes);
+
+class PackageView {
+ public:
+  enum class Verify { Headers, All };
+
+  static PackageView open(const std::filesystem::path& path, Verify verify = Verify::Headers);
+
+  PackageView(PackageView&& other) noexcept;
+  PackageView& operator=(PackageView&& other) noexcept;
+  PackageView(const PackageView&) = delete;
+  PackageView& operator=(const PackageView&) = delete;
+  ~PackageView();
+
+  const std::string& fileName() const { return name_; }
+  uint64_t fileBytes() const { return size_; }
+  const pkg::PackageHeader& header() const { return *header_; }
+  const pkg::SectionEntry& section(pkg::SectionType type) const {
+    return sections_[static_cast<uint32_t>(type)];
+  }
+  glm::dvec3 origin() const;
+  double positionStepM() const { return header_->position_step_m; }
+
+  std::span<const pkg::ClusterRecord> clusters() const { return clusters_; }
+  std::span<const pkg::GroupRecord> groups() const { return groups_; }
+  std::span<const pkg::PageRecord> pages() const { return pages_; }
+  std::span<const pkg::InstanceRecord> instances() const { return instances_; }
+  std::span<const glm::vec2> profilePoints() const { return profiles_; }
+  std::span<const pkg::ObjectRecord> objects() const { return objects_; }
+  std::span<const pkg::LayerRecord> layers() const { return layers_; }
+  std::string_view strings() const { return strings_; }
+  std::span<const uint8_t> visibility() const { return visibility_; }
+
+  // Strings of validated records (offsets were checked at open).
+  std::string_view objectName(uint32_t object) const;
+  std::string_view objectDbKey(uint32_t object) const;
+  std::string_view layerName(uint32_t layer) const;
+
+  // The stored (possibly compressed) bytes of a page, straight from the mapping.
+  std::span<const uint8_t> pageStored(uint32_t page) const;
+  // Checks the page's checksum, then decompresses it if needed into `raw` (resized to raw_bytes).
+  // Throws FormatError at the page's file offset on a checksum or decompression failure.
+  void readPage(uint32_t page, std::vector<uint8_t>& raw) const;
+  // As readPage, without a copy for uncompressed pages: returns the raw bytes, either straight
+  // from the mapping or decompressed into `scratch` (valid until scratch changes).
+  std::span<const uint8_t> loadPage(uint32_t page, std::vector<uint8_t>& scratch) const;
+  // Decodes mesh cluster `cluster` from the raw bytes of its page (from readPage) and checks it
+  // against its record. Throws FormatError on any mismatch or decoding failure.
+  void decodeCluster(uint32_t cluster, std::span<const uint8_t> raw_page,
+                     DecodedCluster& out) const;
+
+ private:
+  PackageView() = default;
+  void validate(Verify verify);
+  void verifyAll();
+  [[noreturn]] void fail(uint64_t offset, const std::string& reason) const;
+  uint64_t offsetOf(const void* p) const {
+    return static_cast<uint64_t>(static_cast<const uint8_t*>(p) - data_);
+  }
+  void release();
+
+  std::string name_;
+  const uint8_t* data_ = nullptr;
+  uint64_t size_ = 0;
+  const pkg::PackageHeader* header_ = nullptr;
+  std::vector<pkg::SectionEntry> sections_;  // copied: the table is small
+  std::span<const pkg::ClusterRecord> clusters_;
+  std::span<const pkg::GroupRecord> groups_;
+  std::span<const pkg::PageRecord> pages_;
+  std::span<const pkg::InstanceRecord> instances_;
+  std::span<const glm::vec2> profiles_;
+  std::span<const pkg::ObjectRecord> objects_;
+  std::span<const pkg::LayerRecord> layers_;
+  std::string_view strings_;
+  std::span<const uint8_t> visibility_;
+  std::span<const uint8_t> page_data_;
+};
+
+}  // namespace tw

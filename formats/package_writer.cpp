@@ -1,0 +1,452 @@
+// PackageStorage helpers and writePackage: lays out, checksums and atomically writes a .twk.
+#include "package_writer.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <initializer_list>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <variant>
+
+#include "package_view.h"
+#include "tws_format.h"
+
+namespace tw {
+namespace {
+
+using namespace pkg;
+
+void setVec3(float out[3], const glm::vec3& v) {
+  out[0] = v.x;
+  out[1] = v.y;
+  out[2] = v.z;
+}
+
+uint32_t checkedStringBytes(std::string_view text, const char* what) {
+  if (text.size() > kMaxStringBytes)
+    throw std::invalid_argument(std::string("package: ") + what + " is longer than " +
+                                std::to_string(kMaxStringBytes) + " bytes");
+  return static_cast<uint32_t>(text.size());
+}
+
+// One output file, removed unless commit() renamed it.
+class TempFile {
+ public:
+  TempFile(const std::filesystem::path& path)
+      : path_(path), temp_(path.string() + ".tmp-" + std::to_string(::getpid())) {
+    file_ = std::fopen(temp_.c_str(), "wb");
+    if (!file_) ioFail("cannot create");
+  }
+  ~TempFile() {
+    if (file_) std::fclose(file_);
+    if (!committed_) {
+      std::error_code ec;
+      std::filesystem::remove(temp_, ec);
+    }
+  }
+  const std::filesystem::path& tempPath() const { return temp_; }
+
+  void write(const void* data, uint64_t bytes) {
+    if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes) ioFail("cannot write");
+    written_ += bytes;
+  }
+  void padTo(uint64_t offset) {
+    static const uint8_t kZeros[kSectionAlignment] = {};
+    while (written_ < offset) write(kZeros, std::min<uint64_t>(offset - written_, sizeof(kZeros)));
+  }
+  void close() {
+    bool ok = std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
+    ok = std::fclose(file_) == 0 && ok;
+    file_ = nullptr;
+    if (!ok) ioFail("cannot finish writing");
+  }
+  void commit() {
+    std::error_code ec;
+    std::filesystem::rename(temp_, path_, ec);
+    if (ec)
+      throw std::runtime_error(path_.string() + ": cannot rename " + temp_.string() + ": " +
+                               ec.message());
+    committed_ = true;
+  }
+
+ private:
+  [[noreturn]] void ioFail(const std::string& what) const {
+    throw std::runtime_error(path_.string() + ": " + what + " " + temp_.string() + ": " +
+                             std::strerror(errno));
+  }
+  std::filesystem::path path_;
+  std::filesystem::path temp_;
+  std::FILE* file_ = nullptr;
+  uint64_t written_ = 0;
+  bool committed_ = false;
+};
+
+}  // namespace
+
+uint64_t PackageStorage::addString(std::string_view text) {
+  uint64_t offset = strings.size();
+  strings.append(text);
+  return offset;
+}
+
+uint32_t PackageStorage::addLayer(const Layer& layer) {
+  LayerRecord r{};
+  r.name_bytes = checkedStringBytes(layer.name, "layer name");
+  r.name_offset = addString(layer.name);
+  r.color_rgba = layer.color_rgba;
+  layers.push_back(r);
+  return static_cast<uint32_t>(layers.size() - 1);
+}
+
+uint32_t PackageStorage::addObject(const ObjectInfo& info, const glm::vec3& aabb_min,
+                                   const glm::vec3& aabb_max) {
+  ObjectRecord r{};
+  r.id = info.id;
+  r.layer = info.layer;
+  r.color_rgba = info.color_rgba;
+  r.name_bytes = checkedStringBytes(info.name, "object name");
+  r.name_offset = addString(info.name);
+  r.db_key_bytes = checkedStringBytes(info.db_key, "database key");
+  r.db_key_offset = addString(info.db_key);
+  setVec3(r.aabb_min, aabb_min);
+  setVec3(r.aabb_max, aabb_max);
+  objects.push_back(r);
+  return static_cast<uint32_t>(objects.size() - 1);
+}
+
+void PackageStorage::placeEncodedCluster(std::span<const uint8_t> encoded, ClusterRecord& record) {
+  if (encoded.size() > kMaxPageRawBytes)
+    throw std::invalid_argument("package: encoded cluster is larger than a page may be");
+  uint64_t offset = pages.empty() ? 0 : alignUp(pages.back().size(), kClusterAlignment);
+  if (pages.empty() || (!pages.back().empty() && offset + encoded.size() > target_page_bytes) ||
+      offset + encoded.size() > kMaxPageRawBytes) {
+    pages.emplace_back();
+    pages.back().reserve(target_page_bytes);
+    offset = 0;
+  }
+  std::vector<uint8_t>& page = pages.back();
+  page.resize(offset, 0);
+  page.insert(page.end(), encoded.begin(), encoded.end());
+  record.page = static_cast<uint32_t>(pages.size() - 1);
+  record.page_offset = static_cast<uint32_t>(offset);
+  record.encoded_bytes = static_cast<uint32_t>(encoded.size());
+}
+
+uint32_t PackageStorage::addMeshCluster(const ClusterGeometryInput& geometry, const ClusterLod& lod,
+                                        bool optimize) {
+  std::vector<uint8_t> encoded;
+  ClusterEncodeOptions options;
+  options.position_step_m = position_step_m;
+  options.optimize = optimize;
+  EncodedClusterInfo info = encodeCluster(geometry, options, encoded);
+
+  ClusterRecord r{};
+  setVec3(r.center, info.center);
+  r.radius = info.radius;
+  setVec3(r.aabb_min, info.aabb_min);
+  setVec3(r.aabb_max, info.aabb_max);
+  r.error = lod.error;
+  r.parent_error = lod.parent_error;
+  glm::vec4 sphere = lod.lod_sphere.w > 0.0f ? lod.lod_sphere : glm::vec4(info.center, info.radius);
+  glm::vec4 parent = lod.parent_lod_sphere.w > 0.0f ? lod.parent_lod_sphere : sphere;
+  setVec3(r.lod_center, glm::vec3(sphere));
+  r.lod_radius = sphere.w;
+  setVec3(r.parent_lod_center, glm::vec3(parent));
+  r.parent_lod_radius = parent.w;
+  r.group = lod.group;
+  r.parent_group = lod.parent_group;
+  r.level = lod.level;
+  r.kind = static_cast<uint8_t>(ClusterKind::Mesh);
+  r.triangle_count = info.triangle_count;
+  r.vertex_count = info.vertex_count;
+  r.object_min = info.object_min;
+  r.object_max = info.object_max;
+  placeEncodedCluster(encoded, r);
+  clusters.push_back(r);
+  return static_cast<uint32_t>(clusters.size() - 1);
+}
+
+namespace {
+
+// Fills the type, flags, params and profile of `r` from the primitive (tws parameter layout).
+struct InstanceFiller {
+  InstanceRecord& r;
+  std::vector<glm::vec2>& profiles;
+  void operator()(const Cylinder& c) {
+    set(PrimitiveType::Cylinder, {c.radius, c.height}, c.capped);
+  }
+  void operator()(const Cone& c) {
+    set(PrimitiveType::Cone, {c.radius_bottom, c.radius_top, c.height}, c.capped);
+  }
+  void operator()(const Sphere& s) { set(PrimitiveType::Sphere, {s.radius}, false); }
+  void operator()(const TorusSegment& t) {
+    set(PrimitiveType::TorusSegment, {t.major_radius, t.minor_radius, t.sweep_rad}, false);
+  }
+  void operator()(const Box& b) {
+    set(PrimitiveType::Box, {b.half_extents.x, b.half_extents.y, b.half_extents.z}, false);
+  }
+  void operator()(const Extrusion& e) {
+    set(PrimitiveType::Extrusion, {e.height}, false);
+    profile(e.profile);
+  }
+  void operator()(const Revolution& v) {
+    set(PrimitiveType::Revolution, {v.sweep_rad}, false);
+    profile(v.profile);
+  }
+  void set(PrimitiveType type, std::initializer_list<float> params, bool capped) {
+    r.type = static_cast<uint32_t>(type);
+    r.flags = capped ? kInstanceCapped : 0;
+    std::copy(params.begin(), params.end(), r.params);
+  }
+  void profile(const std::vector<glm::vec2>& points) {
+    if (points.size() > kMaxProfilePoints)
+      throw std::invalid_argument("package: profile has more than 65536 points");
+    r.profile_first = static_cast<uint32_t>(profiles.size());
+    r.profile_count = static_cast<uint32_t>(points.size());
+    profiles.insert(profiles.end(), points.begin(), points.end());
+  }
+};
+
+}  // namespace
+
+void instanceBounds(const InstanceRecord& in, std::span<const glm::vec2> profile_points,
+                    glm::vec3& aabb_min, glm::vec3& aabb_max) {
+  const float* p = in.params;
+  glm::vec3 lo(0.0f), hi(0.0f);
+  switch (static_cast<PrimitiveType>(in.type)) {
+    case PrimitiveType::Cylinder:
+      lo = {-p[0], -p[0], 0.0f};
+      hi = {p[0], p[0], p[1]};
+      break;
+    case PrimitiveType::Cone: {
+      float r = std::max(p[0], p[1]);
+      lo = {-r, -r, 0.0f};
+      hi = {r, r, p[2]};
+      break;
+    }
+    case PrimitiveType::Sphere:
+      lo = glm::vec3(-p[0]);
+      hi = glm::vec3(p[0]);
+      break;
+    case PrimitiveType::TorusSegment: {  // the whole torus: conservative for any sweep
+      float r = p[0] + p[1];
+      lo = {-r, -r, -p[1]};
+      hi = {r, r, p[1]};
+      break;
+    }
+    case PrimitiveType::Box:
+      lo = {-p[0], -p[1], -p[2]};
+      hi = {p[0], p[1], p[2]};
+      break;
+    case PrimitiveType::Extrusion:
+    case PrimitiveType::Revolution: {
+      const bool extrusion = in.type == static_cast<uint32_t>(PrimitiveType::Extrusion);
+      glm::vec2 pmin(std::numeric_limits<float>::max()), pmax(-std::numeric_limits<float>::max());
+      for (uint32_t i = 0; i < in.profile_count; ++i) {
+        pmin = glm::min(pmin, profile_points[in.profile_first + i]);
+        pmax = glm::max(pmax, profile_points[in.profile_first + i]);
+      }
+      if (in.profile_count == 0) pmin = pmax = glm::vec2(0.0f);
+      if (extrusion) {
+        lo = {pmin.x, pmin.y, 0.0f};
+        hi = {pmax.x, pmax.y, p[0]};
+      } else {  // (radius, z) profile revolved about +Z
+        lo = {-pmax.x, -pmax.x, pmin.y};
+        hi = {pmax.x, pmax.x, pmax.y};
+      }
+      break;
+    }
+  }
+  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::vec3 origin(in.origin[0], in.origin[1], in.origin[2]);
+  aabb_min = glm::vec3(std::numeric_limits<float>::max());
+  aabb_max = glm::vec3(-std::numeric_limits<float>::max());
+  for (int corner = 0; corner < 8; ++corner) {
+    glm::vec3 local(corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z);
+    glm::vec3 world = origin + linear * local;
+    aabb_min = glm::min(aabb_min, world);
+    aabb_max = glm::max(aabb_max, world);
+  }
+}
+
+uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform& transform,
+                                     uint32_t object) {
+  if (std::string problem = tws::primitiveProblem(primitive); !problem.empty())
+    throw std::invalid_argument("package: " + problem);
+  InstanceRecord r{};
+  glm::vec3 at(transform.origin - origin);
+  setVec3(r.origin, at);
+  const float* m = &transform.linear[0][0];
+  std::copy(m, m + 9, r.linear);
+  r.object = object;
+  std::visit(InstanceFiller{r, profile_points}, primitive);
+  instances.push_back(r);
+  return static_cast<uint32_t>(instances.size() - 1);
+}
+
+uint32_t PackageStorage::addParametricCluster(uint32_t first_instance, uint32_t count,
+                                              const ClusterLod& lod) {
+  if (count == 0 || first_instance > instances.size() ||
+      count > instances.size() - first_instance)
+    throw std::invalid_argument("package: parametric cluster instance range is invalid");
+  ClusterRecord r{};
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  r.object_min = ~0u;
+  for (uint32_t i = first_instance; i < first_instance + count; ++i) {
+    const InstanceRecord& in = instances[i];
+    if (in.type != instances[first_instance].type)
+      throw std::invalid_argument("package: a parametric cluster mixes primitive types");
+    glm::vec3 bmin, bmax;
+    instanceBounds(in, profile_points, bmin, bmax);
+    lo = glm::min(lo, bmin);
+    hi = glm::max(hi, bmax);
+    r.object_min = std::min(r.object_min, in.object);
+    r.object_max = std::max(r.object_max, in.object);
+  }
+  setVec3(r.aabb_min, lo);
+  setVec3(r.aabb_max, hi);
+  glm::vec3 center = (lo + hi) * 0.5f;
+  float radius = std::nextafter(glm::length(hi - lo) * 0.5f, std::numeric_limits<float>::max());
+  setVec3(r.center, center);
+  r.radius = radius;
+  r.error = lod.error;
+  r.parent_error = lod.parent_error;
+  glm::vec4 sphere = lod.lod_sphere.w > 0.0f ? lod.lod_sphere : glm::vec4(center, radius);
+  glm::vec4 parent = lod.parent_lod_sphere.w > 0.0f ? lod.parent_lod_sphere : sphere;
+  setVec3(r.lod_center, glm::vec3(sphere));
+  r.lod_radius = sphere.w;
+  setVec3(r.parent_lod_center, glm::vec3(parent));
+  r.parent_lod_radius = parent.w;
+  r.group = lod.group;
+  r.parent_group = lod.parent_group;
+  r.level = lod.level;
+  r.kind = static_cast<uint8_t>(ClusterKind::Parametric);
+  r.page = kNone;
+  r.instance_first = first_instance;
+  r.instance_count = count;
+  clusters.push_back(r);
+  return static_cast<uint32_t>(clusters.size() - 1);
+}
+
+PackageWriteStats writePackage(const PackageStorage& storage, const std::filesystem::path& path,
+                               const PackageWriteOptions& options) {
+  PackageWriteStats stats;
+
+  // Pages: compress each, keep the raw bytes when compression does not help.
+  std::vector<PageRecord> page_records(storage.pages.size());
+  for (const ClusterRecord& c : storage.clusters)
+    if (c.kind == static_cast<uint8_t>(ClusterKind::Mesh) && c.page < page_records.size())
+      ++page_records[c.page].cluster_count;
+  std::vector<uint8_t> page_data;
+  std::vector<uint8_t> compressed;
+  for (size_t i = 0; i < storage.pages.size(); ++i) {
+    const std::vector<uint8_t>& raw = storage.pages[i];
+    if (raw.size() > kMaxPageRawBytes)
+      throw std::invalid_argument("package: page " + std::to_string(i) + " is over the size limit");
+    stats.page_raw_bytes += raw.size();
+    PageRecord& p = page_records[i];
+    p.offset = alignUp(page_data.size(), kSectionAlignment);
+    page_data.resize(p.offset, 0);
+    p.raw_bytes = static_cast<uint32_t>(raw.size());
+    compressed.clear();
+    if (options.zstd && !raw.empty()) compressPage(raw, options.zstd_level, compressed);
+    const bool use_zstd = options.zstd && !raw.empty() && compressed.size() < raw.size();
+    const std::vector<uint8_t>& stored = use_zstd ? compressed : raw;
+    p.codec = static_cast<uint32_t>(use_zstd ? PageCodec::Zstd : PageCodec::None);
+    p.stored_bytes = static_cast<uint32_t>(stored.size());
+    p.checksum = packageSectionChecksum(stored);
+    page_data.insert(page_data.end(), stored.begin(), stored.end());
+  }
+
+  // Header.
+  PackageHeader h{};
+  std::memcpy(h.magic, kMagic, sizeof(kMagic));
+  h.version = kVersion;
+  h.minor_version = kMinorVersion;
+  h.header_bytes = sizeof(PackageHeader);
+  h.section_entry_bytes = sizeof(SectionEntry);
+  h.section_count = kSectionCount;
+  h.input_hash = storage.input_hash;
+  h.cluster_record_bytes = sizeof(ClusterRecord);
+  h.group_record_bytes = sizeof(GroupRecord);
+  h.page_record_bytes = sizeof(PageRecord);
+  h.instance_record_bytes = sizeof(InstanceRecord);
+  h.object_record_bytes = sizeof(ObjectRecord);
+  h.layer_record_bytes = sizeof(LayerRecord);
+  h.encoded_cluster_header_bytes = sizeof(EncodedClusterHeader);
+  for (int a = 0; a < 3; ++a) h.origin[a] = storage.origin[a];
+  h.position_step_m = storage.position_step_m;
+  h.target_page_bytes = storage.target_page_bytes;
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (const ClusterRecord& c : storage.clusters) {
+    lo = glm::min(lo, glm::vec3(c.aabb_min[0], c.aabb_min[1], c.aabb_min[2]));
+    hi = glm::max(hi, glm::vec3(c.aabb_max[0], c.aabb_max[1], c.aabb_max[2]));
+    h.level_count = std::max<uint32_t>(h.level_count, c.level + 1u);
+    h.max_cluster_triangles = std::max(h.max_cluster_triangles, c.triangle_count);
+    if (c.level == 0) h.total_triangles += c.triangle_count;
+  }
+  if (storage.clusters.empty()) lo = hi = glm::vec3(0.0f);
+  setVec3(h.bounds_min, lo);
+  setVec3(h.bounds_max, hi);
+
+  // Sections, in file order == table order.
+  struct Piece {
+    const void* data;
+    uint64_t count;
+  };
+  const Piece pieces[kSectionCount] = {
+      {storage.clusters.data(), storage.clusters.size()},
+      {storage.groups.data(), storage.groups.size()},
+      {page_records.data(), page_records.size()},
+      {storage.instances.data(), storage.instances.size()},
+      {storage.profile_points.data(), storage.profile_points.size()},
+      {storage.objects.data(), storage.objects.size()},
+      {storage.layers.data(), storage.layers.size()},
+      {storage.strings.data(), storage.strings.size()},
+      {storage.visibility.data(), storage.visibility.size()},
+      {page_data.data(), page_data.size()},
+  };
+  SectionEntry table[kSectionCount] = {};
+  uint64_t cursor = sizeof(PackageHeader) + sizeof(table);
+  for (uint32_t i = 0; i < kSectionCount; ++i) {
+    SectionEntry& e = table[i];
+    e.type = i;
+    e.record_bytes = kSectionRecordBytes[i];
+    e.count = pieces[i].count;
+    e.bytes = pieces[i].count * kSectionRecordBytes[i];
+    e.offset = alignUp(cursor, kSectionAlignment);
+    e.checksum = packageSectionChecksum(
+        {static_cast<const uint8_t*>(pieces[i].data), static_cast<size_t>(e.bytes)});
+    cursor = e.offset + e.bytes;
+    stats.section_bytes[i] = e.bytes;
+  }
+  h.file_bytes = cursor;
+  h.header_checksum = packageHeaderChecksum(h, table);
+  stats.file_bytes = cursor;
+
+  TempFile out(path);
+  out.write(&h, sizeof(h));
+  out.write(table, sizeof(table));
+  for (uint32_t i = 0; i < kSectionCount; ++i) {
+    out.padTo(table[i].offset);
+    out.write(pieces[i].data, table[i].bytes);
+  }
+  out.close();
+  // The view's checks are the definition of a valid package: refuse to publish anything else.
+  try {
+    PackageView::open(out.tempPath(), PackageView::Verify::Headers);
+  } catch (const FormatError& e) {
+    throw std::invalid_argument("writePackage: storage is inconsistent: " + e.reason());
+  }
+  out.commit();
+  return stats;
+}
+
+}  // namespace tw

@@ -1,0 +1,102 @@
+// PackageStorage, the owning form of a package the preprocessor fills, and writePackage.
+//
+// The preprocessor appends records to the vectors (through the helpers where they exist), then
+// writePackage lays the sections out (docs/package-format.md), compresses pages, checksums each
+// section with XXH3-64 and writes everything to "<path>.tmp-<pid>", which it re-opens with
+// PackageView (so the writer never produces a file its reader rejects) and renames onto `path`.
+// Memory: the whole package is held in memory; a streaming writer is future work.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "package_format.h"
+#include "page_codec.h"
+#include "scene.h"
+
+namespace tw {
+
+// LOD placement of a cluster in the DAG (see pkg::ClusterRecord for the selection rule).
+struct ClusterLod {
+  uint32_t group = pkg::kNone;
+  uint32_t parent_group = pkg::kNone;
+  uint16_t level = 0;
+  float error = 0.0f;                                           // metres
+  float parent_error = std::numeric_limits<float>::infinity();  // metres; +inf for roots
+  glm::vec4 lod_sphere{0.0f};         // center xyz, radius w; radius 0 = use the cluster's bounds
+  glm::vec4 parent_lod_sphere{0.0f};  // radius 0 = use lod_sphere
+};
+
+struct PackageStorage {
+  // Build constants copied into the header.
+  glm::dvec3 origin{0.0};  // world metres; all floats are relative to it
+  double position_step_m = pkg::kDefaultPositionStepM;
+  uint32_t target_page_bytes = pkg::kDefaultTargetPageBytes;
+  uint64_t input_hash = 0;  // XXH3-64 of inputs and options, caller's
+
+  std::vector<pkg::ClusterRecord> clusters;
+  std::vector<pkg::GroupRecord> groups;
+  std::vector<std::vector<uint8_t>> pages;  // raw bytes: encoded clusters, 16-aligned
+  std::vector<pkg::InstanceRecord> instances;
+  std::vector<glm::vec2> profile_points;
+  std::vector<pkg::ObjectRecord> objects;
+  std::vector<pkg::LayerRecord> layers;
+  std::string strings;              // the string pool
+  std::vector<uint8_t> visibility;  // reserved: empty in format 1.0
+
+  // Appends bytes to the string pool (no deduplication); returns their offset.
+  uint64_t addString(std::string_view text);
+  // Appends a layer / object record with its strings; returns its index. `aabb_*` are the
+  // object's level-0 bounds relative to origin.
+  uint32_t addLayer(const Layer& layer);
+  uint32_t addObject(const ObjectInfo& info, const glm::vec3& aabb_min, const glm::vec3& aabb_max);
+
+  // Copies an encoded cluster into the current page, opening a new page when the current one would
+  // grow past target_page_bytes; fills record.page, page_offset and encoded_bytes.
+  void placeEncodedCluster(std::span<const uint8_t> encoded, pkg::ClusterRecord& record);
+
+  // Encodes `geometry` (page_codec.h) with this package's step, places it in a page and appends
+  // its cluster record with bounds from the decoded positions; returns the cluster index.
+  // Throws std::invalid_argument on bad geometry.
+  uint32_t addMeshCluster(const ClusterGeometryInput& geometry, const ClusterLod& lod,
+                          bool optimize = true);
+
+  // Appends `primitive`, placed by `transform` (its origin is world metres; stored relative to
+  // this package's origin), as an instance of object index `object`, with its profile points;
+  // returns the instance index. Throws std::invalid_argument for parameters the format forbids.
+  uint32_t addInstance(const Primitive& primitive, const Transform& transform, uint32_t object);
+  // Appends a parametric cluster over instances [first_instance, first_instance + count), which
+  // must share one primitive type, with bounds from their parameters; returns the cluster index.
+  uint32_t addParametricCluster(uint32_t first_instance, uint32_t count, const ClusterLod& lod);
+};
+
+// Conservative box of an instance in the package frame (its parameters' local box, transformed).
+void instanceBounds(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points,
+                    glm::vec3& aabb_min, glm::vec3& aabb_max);
+
+struct PackageWriteOptions {
+  bool zstd = true;  // compress pages; a page that does not shrink is stored raw
+  int zstd_level = 9;
+};
+
+// What was written, for reports.
+struct PackageWriteStats {
+  uint64_t file_bytes = 0;
+  uint64_t section_bytes[pkg::kSectionCount] = {};
+  uint64_t page_raw_bytes = 0;  // before compression
+};
+
+// Writes `storage` to `path` atomically (temporary file, then rename). Throws
+// std::invalid_argument when the storage is inconsistent (the check is PackageView's, with its
+// reason), std::runtime_error on I/O failure; the temporary file is removed either way.
+PackageWriteStats writePackage(const PackageStorage& storage, const std::filesystem::path& path,
+                               const PackageWriteOptions& options = {});
+
+}  // namespace tw
