@@ -136,19 +136,20 @@ void emitDecksWallsAccess(Context& c) {
     // Walls: blast walls on the outboard face and the west end of the lowest storey only;
     // upper storeys are open frames, so the plant reads as a plant from outside while decks
     // and the low walls still occlude views from inside.
-    std::string wall_key = c.tag("WL", level + 1, "wall", "blast and weather walls");
-    double wall_y = outboard_low_y ? -0.12 : 22.0;
-    double wall_top = z + kStoreyHeightM - kPlate - 0.7;
-    for (int ix = 0; level == 0 && ix < kBaysX; ++ix) {
-      // Louvred openings, but never a wall record without a panel.
-      if (c.rng.chance(0.2f) && ix != 1) continue;
-      emitBox(c.out, kLayerDecks, wall_key, format("wall M%u L%u bay %d", c.area, level, ix),
-              c.at(kXs[ix], wall_y, z), c.at(kXs[ix + 1], wall_y + 0.12, wall_top));
-    }
-    if (level == 0)
+    if (level == 0) {
+      std::string wall_key = c.tag("WL", level + 1, "wall", "blast and weather walls");
+      double wall_y = outboard_low_y ? -0.12 : 22.0;
+      double wall_top = z + kStoreyHeightM - kPlate - 0.7;
+      for (int ix = 0; ix < kBaysX; ++ix) {
+        // Louvred openings, but never a wall record without a panel.
+        if (c.rng.chance(0.2f) && ix != 1) continue;
+        emitBox(c.out, kLayerDecks, wall_key, format("wall M%u L%u bay %d", c.area, level, ix),
+                c.at(kXs[ix], wall_y, z), c.at(kXs[ix + 1], wall_y + 0.12, wall_top));
+      }
       for (int iy = 1; iy < kBaysY; ++iy)
         emitBox(c.out, kLayerDecks, wall_key, format("wall M%u L%u end %d", c.area, level, iy),
                 c.at(-0.12, kYs[iy], z), c.at(0.0, kYs[iy + 1], wall_top));
+    }
     // Stairs in the well bay: two flights and a landing per storey.
     std::string stair_key = c.tag("SR", level + 1, "stair", "stair tower flights");
     float half = float(kStoreyHeightM) * 0.5f;
