@@ -125,13 +125,14 @@ enum class ClusterKind : uint8_t { Mesh = 0, Parametric = 1 };
 // One node of the LOD DAG. The DAG is stored flat (Nanite / meshopt clusterlod style): the
 // runtime may test every cluster independently and draws it when
 //   errorPx(error, lod_sphere) <= tau < errorPx(parent_error, parent_lod_sphere).
-// A group is one simplification step: it replaces some clusters of level L (its children, whose
-// parent_group it is) with the clusters of level L + 1 it produced (whose group it is). Siblings
-// share error and lod sphere, and children carry their parent group's error and sphere, so every
-// cluster of a group takes the same decision and the selected cut is crack-free. Invariants
-// (checked by the view): 0 <= error <= parent_error; parent_error is +inf exactly for roots
-// (parent_group == kNone); a produced cluster has level == group level + 1 and error == group
-// error; a child has level == parent group level and parent_error == parent group error. So
+// A group is one simplification step: it replaces some clusters of level <= L (its children,
+// whose parent_group it is) with the clusters of level L + 1 it produced (whose group it is).
+// Siblings share error and lod sphere, and children carry their parent group's error and sphere,
+// so every cluster of a group takes the same decision and the selected cut is crack-free.
+// Invariants (checked by the view): 0 <= error <= parent_error; parent_error is +inf exactly for
+// roots (parent_group == kNone); a produced cluster has level == group level + 1 and error ==
+// group error; a child has level <= parent group level (equal except where merged brick roots of
+// different depths share a group, see dag_merge.h) and parent_error == parent group error. So
 // levels and errors grow strictly toward the roots and the DAG has no cycles. Positions are
 // metres relative to PackageHeader::origin.
 struct ClusterRecord {
@@ -177,7 +178,7 @@ struct GroupRecord {
                            // root); == error when it produced none
   uint32_t first_cluster;  // produced clusters
   uint32_t cluster_count;  // may be 0; first_cluster + cluster_count <= cluster count
-  uint32_t level;          // level of the children; produced clusters are level + 1
+  uint32_t level;          // highest level of the children; produced clusters are level + 1
   uint32_t reserved;       // 0
 };
 static_assert(sizeof(GroupRecord) == 64);

@@ -345,10 +345,11 @@ void PackageView::validate(Verify verify) {
                             str(r.group) + " produced (range, level or error)");
     }
     if (r.parent_group != kNone &&
-        (r.parent_group >= groups_.size() || groups_[r.parent_group].level != r.level ||
+        (r.parent_group >= groups_.size() || r.level > groups_[r.parent_group].level ||
          groups_[r.parent_group].error != r.parent_error))
       fail(at_c + 84, "cluster " + str(c) + " parent group " + str(r.parent_group) +
-                          " is out of range or does not match its level and parent error");
+                          " is out of range or does not match its parent error and level" +
+                          " (a child's level must be <= its parent group's)");
     if (r.flags != 0) fail(at_c + 91, "cluster " + str(c) + " has unknown flags");
     if (r.object_min > r.object_max || r.object_max >= objects_.size())
       fail(at_c + 112, "cluster " + str(c) + " object range [" + str(r.object_min) + ", " +

@@ -169,6 +169,8 @@ struct LevelContext {
   const std::vector<glm::vec3>& positions;
   const std::vector<uint32_t>& vertex_owner;      // group id, or kMulti
   const std::unordered_set<uint64_t>& shared_edges;  // global edges used by several groups
+  const std::vector<uint8_t>& open_vertex;         // on a locked open edge (lock_open_boundaries)
+  const std::unordered_set<uint64_t>& open_edges;  // locked open edges of the first front
   const DagOptions& options;
 };
 
@@ -217,14 +219,21 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   const size_t stride = sizeof(glm::vec3);
   const float scale = meshopt_simplifyScale(pos, vcount, stride);
   auto isMulti = [&](uint32_t local) { return ctx.vertex_owner[l2g[local]] == kMulti; };
+  // A vertex that pins its component: shared with another group, or on a locked open edge.
+  auto isPinned = [&](uint32_t local) {
+    return isMulti(local) || (!ctx.open_vertex.empty() && ctx.open_vertex[l2g[local]]);
+  };
 
   const EdgeCounts in = countEdges(ltris);
-  std::vector<uint64_t> shared;
+  std::vector<uint64_t> shared;  // edges whose triangle count must not change
   for (const auto& [e, count] : in) {
     uint32_t a = uint32_t(e >> 32), b = uint32_t(e);
-    if (isMulti(a) && isMulti(b) && ctx.shared_edges.count(edgeKey(l2g[a], l2g[b])))
+    const uint64_t global = edgeKey(l2g[a], l2g[b]);
+    if ((isMulti(a) && isMulti(b) && ctx.shared_edges.count(global)) ||
+        (!ctx.open_edges.empty() && ctx.open_edges.count(global)))
       shared.push_back(e);
   }
+  std::sort(shared.begin(), shared.end());  // unordered_map order must not leak into results
   const std::vector<uint32_t> vertex_ids = vertexObjectIds(ltris, gids, vcount);
 
   const size_t n = gids.size();
@@ -260,7 +269,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     }
     std::vector<uint8_t> free_root(vcount, 1);
     for (uint32_t v = 0; v < vcount; ++v)
-      if (isMulti(v)) free_root[components.find(v)] = 0;
+      if (isPinned(v)) free_root[components.find(v)] = 0;
     std::vector<uint32_t> btris, bids, ftris, fids;
     for (size_t t = 0; t < n; ++t) {
       bool is_free = free_root[components.find(ltris[3 * t])];
@@ -546,8 +555,8 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
   const float epsilon = std::max(glm::length(hi - lo) * 1e-6f, 1e-12f);
 
   // Level 0.
-  std::vector<WorkCluster> current_work;
-  std::vector<uint32_t> current_ids;
+  std::vector<std::vector<uint32_t>> front_tris;
+  std::vector<uint32_t> front_ids;
   {
     TriangleClusters split = clusterizeTriangles(positions, tris, options.cluster_size);
     for (size_t c = 0; c < split.clusterCount(); ++c) {
@@ -557,18 +566,60 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
         wc.tris.insert(wc.tris.end(), tris.begin() + 3 * t, tris.begin() + 3 * t + 3);
         wc.ids.push_back(ids[t]);
       }
-      DagCluster dc = makeCluster(positions, wc);
-      current_ids.push_back(uint32_t(dag.clusters.size()));
-      dag.clusters.push_back(std::move(dc));
-      current_work.push_back(std::move(wc));
+      front_ids.push_back(uint32_t(dag.clusters.size()));
+      dag.clusters.push_back(makeCluster(positions, wc));
+      front_tris.push_back(std::move(wc.tris));
     }
-    dag.triangles_per_level.push_back(ids.size());
-    dag.clusters_per_level.push_back(uint32_t(current_ids.size()));
+  }
+  continueClusterDag(dag, positions, std::move(front_ids), std::move(front_tris), options, epsilon);
+  return dag;
+}
+
+void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions,
+                        std::vector<uint32_t> front_ids,
+                        std::vector<std::vector<uint32_t>> front_tris, const DagOptions& options,
+                        float epsilon) {
+  if (front_ids.size() != front_tris.size())
+    throw std::invalid_argument("continueClusterDag: one triangle list per front cluster");
+  std::vector<WorkCluster> current_work(front_ids.size());
+  for (size_t c = 0; c < front_ids.size(); ++c) {
+    const DagCluster& cluster = dag.clusters.at(front_ids[c]);
+    if (front_tris[c].size() != cluster.indices.size())
+      throw std::invalid_argument("continueClusterDag: front triangles do not match the cluster");
+    for (uint32_t v : front_tris[c])
+      if (v >= positions.size())
+        throw std::invalid_argument("continueClusterDag: vertex index out of range");
+    current_work[c].tris = std::move(front_tris[c]);
+    current_work[c].ids = cluster.triangle_object_ids;
+  }
+  std::vector<uint32_t> current_ids = std::move(front_ids);
+
+  // Open edges of the first front (used by exactly one triangle) are locked for good when asked:
+  // they are brick seams another DAG must meet exactly.
+  std::vector<uint8_t> open_vertex;
+  std::unordered_set<uint64_t> open_edges;
+  if (options.lock_open_boundaries) {
+    EdgeCounts counts;
+    for (const WorkCluster& wc : current_work)
+      for (size_t i = 0; i < wc.tris.size(); i += 3)
+        for (int k = 0; k < 3; ++k) ++counts[edgeKey(wc.tris[i + k], wc.tris[i + (k + 1) % 3])];
+    open_vertex.assign(positions.size(), 0);
+    for (const auto& [e, count] : counts)
+      if (count == 1) {
+        open_edges.insert(e);
+        open_vertex[uint32_t(e >> 32)] = open_vertex[uint32_t(e)] = 1;
+      }
   }
 
   std::vector<uint32_t> vertex_owner(positions.size());
-  for (uint32_t level = 0; level + 1 < options.max_levels && current_work.size() > 1; ++level) {
-    const uint64_t level_triangles = dag.triangles_per_level[level];
+  while (current_work.size() > 1) {
+    uint64_t level_triangles = 0;
+    uint32_t front_level = 0;
+    for (size_t c = 0; c < current_work.size(); ++c) {
+      level_triangles += current_work[c].ids.size();
+      front_level = std::max(front_level, dag.clusters[current_ids[c]].level);
+    }
+    if (front_level + 1 >= options.max_levels) break;
     std::vector<glm::vec3> centers;
     for (uint32_t id : current_ids) centers.push_back(dag.clusters[id].sphere_center);
 
@@ -601,7 +652,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
       for (const auto& [e, g] : edge_group)
         if (g == kMulti) shared_edges.insert(e);
 
-      LevelContext ctx{positions, vertex_owner, shared_edges, options};
+      LevelContext ctx{positions, vertex_owner, shared_edges, open_vertex, open_edges, options};
       outcomes.assign(groups.size(), GroupOutcome{});
       tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 1),
                         [&](const tbb::blocked_range<size_t>& range) {
@@ -624,20 +675,21 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
       ++dag.stats.levels_below_shrink;
     }
 
-    // Assemble level + 1.
+    // Assemble the next front. A group's level is its highest child level (children of merged
+    // brick roots may differ); it produces clusters one level above.
     std::vector<WorkCluster> next_work;
     std::vector<uint32_t> next_ids;
     for (size_t g = 0; g < groups.size(); ++g) {
       GroupOutcome& o = outcomes[g];
       const uint32_t group_id = uint32_t(dag.groups.size());
       DagGroup group;
-      group.level = level;
       group.method = o.method;
       float max_child_error = 0.0f;
       std::vector<Sphere> spheres;
       for (uint32_t m : groups[g]) {
         const DagCluster& child = dag.clusters[current_ids[m]];
         group.children.push_back(current_ids[m]);
+        group.level = std::max(group.level, child.level);
         max_child_error = std::max(max_child_error, child.error);
         spheres.push_back({child.lod_center, child.lod_radius});
       }
@@ -662,7 +714,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
       }
       for (size_t c = 0; c < made.size(); ++c) {
         DagCluster& dc = made[c];
-        dc.level = level + 1;
+        dc.level = group.level + 1;
         dc.group = group_id;
         dc.error = error;
         dc.lod_center = dc.parent_lod_center = bound.center;
@@ -684,11 +736,22 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
     }
     current_work = std::move(next_work);
     current_ids = std::move(next_ids);
-    dag.triangles_per_level.push_back(new_triangles);
-    dag.clusters_per_level.push_back(uint32_t(current_ids.size()));
   }
-  dag.stats.root_within_limit = dag.triangles_per_level.back() <= options.max_root_triangles;
-  return dag;
+
+  // Per-level totals and the root, from the clusters (bricks merged from different depths make
+  // levels uneven, so they are counted rather than tracked).
+  uint32_t top = 0;
+  for (const DagCluster& c : dag.clusters) top = std::max(top, c.level);
+  dag.triangles_per_level.assign(dag.clusters.empty() ? 0 : top + 1, 0);
+  dag.clusters_per_level.assign(dag.triangles_per_level.size(), 0);
+  uint64_t root_triangles = 0;
+  for (const DagCluster& c : dag.clusters) {
+    dag.triangles_per_level[c.level] += c.triangleCount();
+    ++dag.clusters_per_level[c.level];
+    if (c.parent_group == kNoGroup) root_triangles += c.triangleCount();
+  }
+  dag.root_triangles = root_triangles;
+  dag.stats.root_within_limit = root_triangles <= options.max_root_triangles;
 }
 
 std::vector<uint32_t> selectCut(const ClusterDag& dag, float tau) {

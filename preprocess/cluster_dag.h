@@ -29,6 +29,8 @@
 //  6. Stop at one cluster, or when a level cannot shrink and holds <= max_root_triangles. A level
 //     above max_root_triangles that shrinks less than asked is kept (stats.levels_below_shrink);
 //     one that cannot shrink at all ends the build with stats.root_within_limit = false.
+//  With DagOptions::lock_open_boundaries, the input's open edges count as shared edges (step 4)
+//  and pin their components (never free in step 3), so brick seams never move.
 //
 // Errors (object space, same units as the positions): level-0 clusters have error 0. A group's
 // error is max(its simplification error, its children's errors + epsilon), strictly greater than
@@ -80,6 +82,13 @@ struct DagOptions {
   bool allow_sloppy = true;          // meshopt_simplifySloppy on free components
   bool allow_drop = true;            // drop whole free components, smallest first
   uint32_t max_levels = 64;
+  // Brick seams: every edge used by exactly one triangle of the input (after welding) keeps its
+  // exact triangle count at every level, and a component holding such an edge's vertex is never
+  // free (neither sloppy-simplified nor dropped). Two DAGs built from the two sides of a cut then
+  // show the same seam in every cut of either, so their union is crack-free. Off by default (an
+  // isolated model gains nothing from it and CAD sheets could no longer be dropped); the brick
+  // builds of the preprocessor turn it on.
+  bool lock_open_boundaries = false;
 };
 
 constexpr uint32_t kNoGroup = std::numeric_limits<uint32_t>::max();
@@ -117,7 +126,8 @@ enum class GroupMethod : uint8_t {
 };
 
 struct DagGroup {
-  uint32_t level = 0;               // level of its children
+  uint32_t level = 0;               // highest level of its children (equal in a single build;
+                                    // merged brick roots may differ, see dag_merge.h)
   std::vector<uint32_t> children;   // clusters of `level` it replaces
   std::vector<uint32_t> clusters;   // clusters of level + 1 it produced (may be empty if dropped)
   float error = 0.0f;               // error of `clusters`, parent_error of `children`
@@ -141,10 +151,13 @@ struct DagBuildStats {
 };
 
 struct ClusterDag {
-  std::vector<DagCluster> clusters;              // level by level, level 0 first
-  std::vector<DagGroup> groups;                  // level by level
+  // Level by level, level 0 first (a merged DAG: brick after brick, then the merged levels).
+  // Each group's produced clusters are contiguous, in group order.
+  std::vector<DagCluster> clusters;
+  std::vector<DagGroup> groups;                  // in build order; a group follows its children's
   std::vector<uint64_t> triangles_per_level;     // index = level
   std::vector<uint32_t> clusters_per_level;
+  uint64_t root_triangles = 0;                   // in clusters with parent_group == kNoGroup
   DagBuildStats stats;
 
   uint32_t levelCount() const { return static_cast<uint32_t>(triangles_per_level.size()); }
@@ -158,5 +171,19 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options = {}
 // The clusters a runtime with object-space threshold tau would draw: error <= tau < parent_error.
 // For tau >= 0 the selection covers the surface once, without cracks (see the file comment).
 std::vector<uint32_t> selectCut(const ClusterDag& dag, float tau);
+
+// The level loop of buildClusterDag (steps 2-6), run from an arbitrary front: `front_ids` are
+// clusters of `dag` that have no parent group yet, `front_tris[i]` is cluster front_ids[i]'s
+// triangles as indices into `positions` (one welded vertex per distinct position; the triangle
+// order and object ids are the cluster's). Appends groups and clusters to `dag` and recounts
+// triangles_per_level, clusters_per_level, root_triangles and stats.root_within_limit.
+// `epsilon` is the strict-monotonicity margin added to the children's largest error (about 1e-6
+// of the model's extent). lock_open_boundaries locks the open edges of the front as given.
+// Used by buildClusterDag and mergeBrickDags (dag_merge.h). Throws std::invalid_argument when
+// the front does not match the dag.
+void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions,
+                        std::vector<uint32_t> front_ids,
+                        std::vector<std::vector<uint32_t>> front_tris, const DagOptions& options,
+                        float epsilon);
 
 }  // namespace tw

@@ -1,0 +1,93 @@
+// summarizePackage: per-level statistics of a .twk package from its records (package_summary.h).
+#include "package_summary.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace tw {
+
+const char* packagePrimitiveTypeName(uint32_t type) {
+  static constexpr const char* kNames[pkg::kPrimitiveTypeCount] = {
+      "cylinder", "cone", "sphere", "torus", "box", "extrusion", "revolution"};
+  return type < pkg::kPrimitiveTypeCount ? kNames[type] : "unknown";
+}
+
+PackageSummary summarizePackage(const PackageView& view) {
+  const pkg::PackageHeader& h = view.header();
+  PackageSummary s;
+  s.file = view.fileName();
+  s.file_bytes = view.fileBytes();
+  s.version = h.version;
+  s.minor_version = h.minor_version;
+  s.origin = view.origin();
+  s.position_step_m = h.position_step_m;
+  s.bounds_min = glm::vec3(h.bounds_min[0], h.bounds_min[1], h.bounds_min[2]);
+  s.bounds_max = glm::vec3(h.bounds_max[0], h.bounds_max[1], h.bounds_max[2]);
+  s.level_count = h.level_count;
+  s.total_triangles = h.total_triangles;
+  s.max_cluster_triangles = h.max_cluster_triangles;
+  s.target_page_bytes = h.target_page_bytes;
+  s.input_hash = h.input_hash;
+  for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
+    s.section_bytes[i] = view.section(static_cast<pkg::SectionType>(i)).bytes;
+
+  // The view guarantees every level < level_count.
+  s.levels.resize(h.level_count);
+  for (uint32_t l = 0; l < h.level_count; ++l) {
+    s.levels[l].level = l;
+    s.levels[l].min_error_m = std::numeric_limits<float>::infinity();
+  }
+  const auto instances = view.instances();
+  for (const pkg::ClusterRecord& c : view.clusters()) {
+    PackageLevelSummary& l = s.levels[c.level];
+    ++l.clusters;
+    l.triangles += c.triangle_count;
+    l.vertices += c.vertex_count;
+    if (c.parent_group == pkg::kNone) ++l.roots;
+    if (c.kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric)) {
+      ++l.parametric_clusters;
+      l.instances += c.instance_count;
+    } else {
+      l.encoded_bytes += c.encoded_bytes;
+    }
+    l.min_error_m = std::min(l.min_error_m, c.error);
+    l.max_error_m = std::max(l.max_error_m, c.error);
+    l.mean_error_m += c.error;
+    s.all_level_triangles += c.triangle_count;
+  }
+  for (PackageLevelSummary& l : s.levels) {
+    if (l.clusters) {
+      l.mean_error_m /= double(l.clusters);
+    } else {
+      l.min_error_m = 0.0f;
+    }
+  }
+  for (const pkg::GroupRecord& g : view.groups()) ++s.levels[g.level].groups;
+  s.clusters = view.clusters().size();
+  s.groups = view.groups().size();
+
+  s.pages = view.pages().size();
+  for (const pkg::PageRecord& p : view.pages()) {
+    s.page_stored_bytes += p.stored_bytes;
+    s.page_raw_bytes += p.raw_bytes;
+    if (p.codec != static_cast<uint32_t>(pkg::PageCodec::None)) ++s.pages_compressed;
+  }
+
+  s.instances = instances.size();
+  for (const pkg::InstanceRecord& in : instances) ++s.instances_by_type[in.type];
+  s.profile_points = view.profilePoints().size();
+
+  s.objects = view.objects().size();
+  s.layers.resize(view.layers().size());
+  for (uint32_t l = 0; l < view.layers().size(); ++l) {
+    s.layers[l].name = std::string(view.layerName(l));
+    s.layers[l].color_rgba = view.layers()[l].color_rgba;
+  }
+  for (const pkg::ObjectRecord& o : view.objects()) {
+    ++s.layers[o.layer].objects;
+    if (o.db_key_bytes > 0) ++s.objects_with_db_key;
+  }
+  return s;
+}
+
+}  // namespace tw

@@ -1,0 +1,74 @@
+// PackageSummary: what a .twk package holds, per LOD level and in total, for `terawalk info`.
+//
+// Computed from the records alone (a pass over the resident tables; page data is not read, so a
+// many-GB package is summarised in the time it takes to read its tables). Sizes are bytes,
+// errors and positions metres (positions relative to the package origin).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <glm/glm.hpp>
+#include <string>
+#include <vector>
+
+#include "package_format.h"
+#include "package_view.h"
+
+namespace tw {
+
+struct PackageLevelSummary {
+  uint32_t level = 0;
+  uint64_t clusters = 0;  // mesh + parametric
+  uint64_t parametric_clusters = 0;
+  uint64_t triangles = 0;      // mesh triangles
+  uint64_t vertices = 0;       // mesh vertices as stored (border vertices duplicated)
+  uint64_t instances = 0;      // in parametric clusters
+  uint64_t roots = 0;          // clusters with no parent group
+  uint64_t groups = 0;         // groups whose children are at this level
+  uint64_t encoded_bytes = 0;  // encoded mesh clusters (raw page bytes they use)
+  float min_error_m = 0.0f;    // over the level's clusters
+  float max_error_m = 0.0f;
+  double mean_error_m = 0.0;
+};
+
+struct PackageSummary {
+  std::string file;
+  uint64_t file_bytes = 0;
+  uint32_t version = 0, minor_version = 0;
+  glm::dvec3 origin{0.0};
+  double position_step_m = 0.0;
+  glm::vec3 bounds_min{0.0f}, bounds_max{0.0f};
+  uint32_t level_count = 0;
+  uint64_t total_triangles = 0;      // level 0, as the header records
+  uint64_t all_level_triangles = 0;  // every level
+  uint32_t max_cluster_triangles = 0;
+  uint32_t target_page_bytes = 0;
+  uint64_t input_hash = 0;
+  std::vector<PackageLevelSummary> levels;  // index = level
+
+  uint64_t clusters = 0, groups = 0;
+  uint64_t pages = 0, pages_compressed = 0;
+  uint64_t page_stored_bytes = 0, page_raw_bytes = 0;  // over all pages
+  std::array<uint64_t, pkg::kSectionCount> section_bytes{};
+  std::array<uint64_t, pkg::kPrimitiveTypeCount> instances_by_type{};
+  uint64_t instances = 0, profile_points = 0;
+  uint64_t objects = 0, objects_with_db_key = 0;
+  struct Layer {
+    std::string name;
+    uint32_t color_rgba = 0;
+    uint64_t objects = 0;
+  };
+  std::vector<Layer> layers;
+
+  // File bytes per level-0 (input) triangle; 0 when there are none.
+  double bytesPerInputTriangle() const {
+    return total_triangles ? double(file_bytes) / double(total_triangles) : 0.0;
+  }
+};
+
+// Names of pkg::PrimitiveType values, for output ("cylinder", "cone", ...).
+const char* packagePrimitiveTypeName(uint32_t type);
+
+PackageSummary summarizePackage(const PackageView& view);
+
+}  // namespace tw

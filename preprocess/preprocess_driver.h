@@ -1,0 +1,59 @@
+// The preprocessor end to end: inputs -> bricks on disk -> per-brick LOD DAGs -> merged upper
+// levels -> one package. This is the only stage that does I/O and owns the work directory; the
+// stages it calls are pure functions over buffers.
+//
+// Resume: the work directory "<output>.work" keeps the bricked scene and every finished brick's
+// DAG, keyed by a hash of the inputs (paths, sizes, modification times) and the options. With
+// `resume`, a run reuses what a killed run with the same arguments finished and writes a
+// byte-identical package; without it the work directory is cleared first. It is removed after a
+// successful run.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "progress.h"
+
+namespace tw {
+
+struct PreprocessOptions {
+  std::vector<std::filesystem::path> inputs;
+  std::filesystem::path output;
+  uint64_t memory_budget_bytes = 2ull << 30;
+  uint32_t threads = 0;          // 0: all cores
+  uint32_t cluster_size = 256;   // triangles per cluster
+  uint64_t max_brick_triangles = 0;  // 0: derived from the memory budget
+  bool resume = false;
+  bool keep_work_dir = false;    // for inspection and tests
+  Progress* progress = nullptr;  // cancelled() is polled between bricks
+};
+
+struct StageTime {
+  std::string name;
+  double seconds = 0.0;
+};
+
+struct PreprocessReport {
+  std::vector<StageTime> stages;
+  uint64_t input_triangles = 0;   // mesh + tessellated NURBS
+  uint64_t primitives = 0;        // parametric instances, not tessellated
+  uint64_t objects = 0;
+  uint32_t bricks = 0;
+  uint32_t bricks_reused = 0;     // taken from the resume store
+  bool bricking_reused = false;
+  std::vector<uint64_t> triangles_per_level;
+  uint64_t root_triangles = 0;
+  uint64_t clusters = 0;
+  uint64_t parametric_clusters = 0;
+  uint64_t package_bytes = 0;
+  uint64_t peak_rss_bytes = 0;
+  double seconds = 0.0;
+};
+
+// Throws FormatError for unreadable input, std::runtime_error for I/O failure or cancellation
+// ("cancelled"); the work directory is kept then, so --resume can continue.
+PreprocessReport runPreprocess(const PreprocessOptions& options);
+
+}  // namespace tw

@@ -1,0 +1,177 @@
+// The preprocessor end to end on small inputs: several bricks, a package the reader accepts,
+// shrinking levels, kept objects and layers, and resume after a cancelled run giving the same
+// bytes as an uninterrupted one.
+#include <gtest/gtest.h>
+
+#include <stdexcept>
+
+#include "package_view.h"
+#include "preprocess_driver.h"
+#include "test_support.h"
+#include "tws_writer.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A closed, bumpy grid of boxes spread over a wide area, so bricking splits it, plus a few
+// parametric objects on their own layer.
+fs::path writeScene(const fs::path& dir) {
+  fs::path path = dir / "scene.tws";
+  TwsWriter writer(path);
+  writer.onLayer(0, {"structure", 0xff336699u});
+  writer.onLayer(1, {"piping", 0xff00aa00u});
+  uint32_t id = 0;
+  for (int gx = 0; gx < 12; ++gx)
+    for (int gy = 0; gy < 12; ++gy) {
+      SceneObject object;
+      object.info.id = id++;
+      object.info.name = "block " + std::to_string(gx) + "," + std::to_string(gy);
+      object.info.db_key = "B-" + std::to_string(object.info.id);
+      object.info.transform.origin = {gx * 30.0 + 500000.0, gy * 30.0 + 7000000.0, 0.0};
+      // A subdivided box: 6 faces of n x n quads, welded, closed.
+      constexpr int n = 8;
+      TriangleMesh mesh;
+      auto vertex = [&](glm::vec3 p) {
+        mesh.positions.push_back(p * 5.0f);
+        return static_cast<uint32_t>(mesh.positions.size() - 1);
+      };
+      for (int face = 0; face < 6; ++face) {
+        int axis = face / 2;
+        float side = (face % 2) ? 1.0f : -1.0f;
+        uint32_t base = static_cast<uint32_t>(mesh.positions.size());
+        for (int i = 0; i <= n; ++i)
+          for (int j = 0; j <= n; ++j) {
+            glm::vec3 p(0.0f);
+            p[axis] = side;
+            p[(axis + 1) % 3] = -1.0f + 2.0f * i / n;
+            p[(axis + 2) % 3] = -1.0f + 2.0f * j / n;
+            vertex(p);
+          }
+        for (int i = 0; i < n; ++i)
+          for (int j = 0; j < n; ++j) {
+            uint32_t a = base + i * (n + 1) + j, b = a + 1, c = a + (n + 1), d = c + 1;
+            if (side > 0) mesh.indices.insert(mesh.indices.end(), {a, c, d, a, d, b});
+            else mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+          }
+      }
+      object.geometry = std::move(mesh);
+      writer.onObject(object);
+    }
+  for (int i = 0; i < 20; ++i) {
+    SceneObject pipe;
+    pipe.info.id = id++;
+    pipe.info.layer = 1;
+    pipe.info.name = "pipe " + std::to_string(i);
+    pipe.info.db_key = "6\"-HC-" + std::to_string(1000 + i);
+    pipe.info.transform.origin = {500000.0 + i * 10.0, 7000000.0, 12.0};
+    pipe.geometry = Primitive{Cylinder{0.1f, 8.0f, false}};
+    writer.onObject(pipe);
+  }
+  writer.finish();
+  return path;
+}
+
+// Cancels after `bricks` completed brick builds, as a kill between bricks would.
+class CancelAfterBricks : public Progress {
+ public:
+  explicit CancelAfterBricks(uint64_t bricks) : bricks_(bricks) {}
+  void beginStage(std::string_view name, uint64_t) override { in_bricks_ = name == "build bricks"; }
+  void update(uint64_t done) override {
+    if (in_bricks_ && done >= bricks_) cancel_ = true;
+  }
+  void endStage() override {}
+  bool cancelled() const override { return cancel_; }
+
+ private:
+  uint64_t bricks_;
+  bool in_bricks_ = false;
+  bool cancel_ = false;
+};
+
+PreprocessOptions optionsFor(const fs::path& input, const fs::path& output) {
+  PreprocessOptions options;
+  options.inputs = {input};
+  options.output = output;
+  options.max_brick_triangles = 20000;  // 144 blocks x 768 triangles: several bricks
+  options.cluster_size = 128;
+  return options;
+}
+
+TEST(Preprocess, BuildsAValidPackageFromSeveralBricks) {
+  fs::path dir = test::scratchDir();
+  fs::path input = writeScene(dir);
+  fs::path output = dir / "scene.twk";
+  PreprocessReport report = runPreprocess(optionsFor(input, output));
+  EXPECT_GT(report.bricks, 3u);
+  EXPECT_EQ(report.input_triangles, 144u * 768u);
+  EXPECT_EQ(report.primitives, 20u);
+  EXPECT_EQ(report.objects, 164u);
+  ASSERT_GE(report.triangles_per_level.size(), 3u);
+  for (size_t level = 1; level < report.triangles_per_level.size(); ++level)
+    EXPECT_LE(report.triangles_per_level[level], report.triangles_per_level[level - 1])
+        << "level " << level;
+  EXPECT_LE(report.root_triangles, 65536u);
+  EXPECT_EQ(report.package_bytes, fs::file_size(output));
+  EXPECT_FALSE(fs::exists(output.string() + ".work")) << "work directory left behind";
+
+  PackageView view = PackageView::open(output, PackageView::Verify::All);
+  EXPECT_EQ(view.objects().size(), 164u);
+  EXPECT_EQ(view.layers().size(), 2u);
+  EXPECT_EQ(view.instances().size(), 20u);
+}
+
+TEST(Preprocess, ResumeAfterCancelGivesTheSameBytes) {
+  fs::path dir = test::scratchDir();
+  fs::path input = writeScene(dir);
+  fs::path reference = dir / "reference.twk";
+  PreprocessReport full = runPreprocess(optionsFor(input, reference));
+  ASSERT_GT(full.bricks, 3u);
+
+  fs::path output = dir / "resumed.twk";
+  CancelAfterBricks cancel(2);
+  PreprocessOptions first = optionsFor(input, output);
+  first.progress = &cancel;
+  EXPECT_THROW(runPreprocess(first), std::runtime_error);
+  EXPECT_FALSE(fs::exists(output));
+  EXPECT_TRUE(fs::exists(output.string() + ".work"));
+
+  PreprocessOptions second = optionsFor(input, output);
+  second.resume = true;
+  PreprocessReport resumed = runPreprocess(second);
+  EXPECT_TRUE(resumed.bricking_reused);
+  EXPECT_EQ(resumed.bricks_reused, 2u);
+  EXPECT_EQ(test::readFile(output), test::readFile(reference));
+}
+
+TEST(Preprocess, ResumeWithOtherOptionsStartsOver) {
+  fs::path dir = test::scratchDir();
+  fs::path input = writeScene(dir);
+  fs::path output = dir / "scene.twk";
+  CancelAfterBricks cancel(2);
+  PreprocessOptions first = optionsFor(input, output);
+  first.progress = &cancel;
+  EXPECT_THROW(runPreprocess(first), std::runtime_error);
+  PreprocessOptions second = optionsFor(input, output);
+  second.resume = true;
+  second.cluster_size = 256;  // different output: nothing may be reused
+  PreprocessReport report = runPreprocess(second);
+  EXPECT_EQ(report.bricks_reused, 0u);
+  EXPECT_FALSE(report.bricking_reused && report.bricks_reused > 0);
+}
+
+TEST(Preprocess, RejectsBadArguments) {
+  fs::path dir = test::scratchDir();
+  PreprocessOptions none;
+  none.output = dir / "x.twk";
+  EXPECT_THROW(runPreprocess(none), std::invalid_argument);
+  PreprocessOptions bad = optionsFor(writeScene(dir), dir / "x.twk");
+  bad.cluster_size = 3;
+  EXPECT_THROW(runPreprocess(bad), std::invalid_argument);
+  PreprocessOptions missing = optionsFor(dir / "absent.obj", dir / "x.twk");
+  EXPECT_THROW(runPreprocess(missing), FormatError);
+}
+
+}  // namespace
+}  // namespace tw
