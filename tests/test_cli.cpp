@@ -8,6 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "package_writer.h"
 #include "project_database.h"
 #include "test_support.h"
 
@@ -139,6 +140,67 @@ TEST(Cli, SnapshotWritesAPng) {
   std::string bytes = test::readFile(png);
   ASSERT_GT(bytes.size(), 8u);
   EXPECT_EQ(bytes.substr(1, 3), "PNG");
+}
+
+// A one-cluster package: `verify` passes it and fails it once a page byte changes (exit 1, the
+// check named); `info` summarises it by extension or, renamed, by magic.
+TEST(Cli, VerifyAndInfoOnAPackage) {
+  PackageStorage s;
+  s.addLayer({"deck", 0xff808080u});
+  ObjectInfo o;
+  o.id = 1;
+  o.name = "plate";
+  s.addObject(o, glm::vec3(0.0f), glm::vec3(1.0f, 1.0f, 0.0f));
+  std::vector<glm::vec3> positions;
+  std::vector<uint32_t> indices, objects;
+  for (int y = 0; y <= 4; ++y)
+    for (int x = 0; x <= 4; ++x) positions.push_back({0.25f * x, 0.25f * y, 0.0f});
+  for (uint32_t y = 0; y < 4; ++y)
+    for (uint32_t x = 0; x < 4; ++x) {
+      uint32_t a = y * 5 + x;
+      indices.insert(indices.end(), {a, a + 1, a + 6, a, a + 6, a + 5});
+      objects.insert(objects.end(), {0, 0});
+    }
+  s.addMeshCluster({positions, {}, indices, objects}, ClusterLod{});
+  auto dir = test::scratchDir();
+  auto path = dir / "plate.twk";
+  writePackage(s, path, PackageWriteOptions{false, 9});
+
+  RunResult ok = run("verify --quiet " + path.string());
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_NE(ok.output.find(": OK:"), std::string::npos) << ok.output;
+
+  nlohmann::json j = infoJson(path);
+  EXPECT_EQ(j["format"], "twk");
+  EXPECT_EQ(j["level_count"], 1);
+  EXPECT_EQ(j["triangles"]["level0"], 32);
+  ASSERT_EQ(j["levels"].size(), 1u);
+  EXPECT_EQ(j["levels"][0]["clusters"], 1);
+  EXPECT_EQ(j["layers"][0]["name"], "deck");
+  std::string bytes = test::readFile(path);
+  test::writeFile(dir / "plate.bin", bytes);
+  EXPECT_EQ(infoJson(dir / "plate.bin")["format"], "twk");  // recognised by magic
+  RunResult text = run("info --quiet " + path.string());
+  EXPECT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("1 levels"), std::string::npos) << text.output;
+
+  bytes[bytes.size() - 20] ^= 0x5a;  // page data is the last section
+  test::writeFile(path, bytes);
+  RunResult bad = run("verify --quiet " + path.string());
+  EXPECT_EQ(bad.exit_code, 1) << bad.output;
+  EXPECT_NE(bad.output.find("FAILED (checksums)"), std::string::npos) << bad.output;
+  RunResult bad_json = run("verify --json --quiet " + path.string());
+  EXPECT_EQ(bad_json.exit_code, 1);
+  nlohmann::json f = nlohmann::json::parse(bad_json.output);
+  EXPECT_EQ(f["ok"], false);
+  EXPECT_EQ(f["failure"]["check"], "checksums");
+  EXPECT_EQ(f["failure"]["page"], 0);
+
+  // Not a package at all: the view's own checks fail first.
+  test::writeFile(dir / "scene.twk", "v 0 0 0\n");
+  RunResult junk = run("verify --quiet " + (dir / "scene.twk").string());
+  EXPECT_EQ(junk.exit_code, 1) << junk.output;
+  EXPECT_NE(junk.output.find("FAILED (structure)"), std::string::npos) << junk.output;
 }
 
 }  // namespace

@@ -22,6 +22,8 @@ std::unique_ptr<Progress> makeCommandProgress(const GlobalOptions& global);
 
 void registerGenCommand(CLI::App& app, const GlobalOptions& global);
 void registerInfoCommand(CLI::App& app, const GlobalOptions& global);
+void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global);
 void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global);
+void registerVerifyCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

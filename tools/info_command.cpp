@@ -1,12 +1,19 @@
-// `terawalk info FILE`: what a scene file holds, for people (text) and scripts (--json).
+// `terawalk info FILE`: what a scene file or a package holds, for people (text) and scripts
+// (--json). A package (.twk, recognised by extension or magic) gets its per-level summary
+// (package_summary.h) instead of the scene statistics.
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 
 #include <nlohmann/json.hpp>
 
 #include "command.h"
+#include "package_summary.h"
+#include "package_view.h"
 #include "scene_io.h"
 #include "scene_stats.h"
 #include "tessellate.h"
@@ -101,12 +108,150 @@ void printText(const std::string& file, uint64_t file_bytes, const SceneStats& s
   std::printf("read in     %.2f s\n", seconds);
 }
 
+// A package by extension, or by its magic whatever the name.
+bool isPackageFile(const std::string& file) {
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext == ".twk") return true;
+  char magic[sizeof(pkg::kMagic)] = {};
+  std::ifstream in(file, std::ios::binary);
+  return in.read(magic, sizeof(magic)) && std::memcmp(magic, pkg::kMagic, sizeof(magic)) == 0;
+}
+
+nlohmann::json vec3Json(const glm::vec3& v) { return {v.x, v.y, v.z}; }
+
+nlohmann::json packageToJson(const PackageSummary& s) {
+  nlohmann::json j;
+  j["file"] = s.file;
+  j["format"] = "twk";
+  j["version"] = std::to_string(s.version) + "." + std::to_string(s.minor_version);
+  j["file_bytes"] = s.file_bytes;
+  j["origin"] = {s.origin.x, s.origin.y, s.origin.z};
+  j["position_step_m"] = s.position_step_m;
+  j["bounds"] = {{"min", vec3Json(s.bounds_min)}, {"max", vec3Json(s.bounds_max)}};
+  j["input_hash"] = s.input_hash;
+  j["level_count"] = s.level_count;
+  j["triangles"] = {{"level0", s.total_triangles}, {"all_levels", s.all_level_triangles}};
+  j["max_cluster_triangles"] = s.max_cluster_triangles;
+  j["clusters"] = s.clusters;
+  j["groups"] = s.groups;
+  j["bytes_per_input_triangle"] = s.bytesPerInputTriangle();
+  nlohmann::json levels = nlohmann::json::array();
+  for (const PackageLevelSummary& l : s.levels)
+    levels.push_back({{"level", l.level},
+                      {"clusters", l.clusters},
+                      {"parametric_clusters", l.parametric_clusters},
+                      {"triangles", l.triangles},
+                      {"vertices", l.vertices},
+                      {"instances", l.instances},
+                      {"roots", l.roots},
+                      {"groups", l.groups},
+                      {"encoded_bytes", l.encoded_bytes},
+                      {"error_m", {{"min", l.min_error_m},
+                                   {"max", l.max_error_m},
+                                   {"mean", l.mean_error_m}}}});
+  j["levels"] = levels;
+  j["pages"] = {{"count", s.pages},
+                {"compressed", s.pages_compressed},
+                {"stored_bytes", s.page_stored_bytes},
+                {"raw_bytes", s.page_raw_bytes},
+                {"target_bytes", s.target_page_bytes}};
+  nlohmann::json sections;
+  for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
+    sections[pkg::kSectionNames[i]] = s.section_bytes[i];
+  j["section_bytes"] = sections;
+  nlohmann::json prims;
+  for (uint32_t t = 0; t < pkg::kPrimitiveTypeCount; ++t)
+    prims[packagePrimitiveTypeName(t)] = s.instances_by_type[t];
+  j["instances"] = {
+      {"total", s.instances}, {"by_type", prims}, {"profile_points", s.profile_points}};
+  j["objects"] = s.objects;
+  j["objects_with_db_key"] = s.objects_with_db_key;
+  nlohmann::json layers = nlohmann::json::array();
+  for (const auto& layer : s.layers)
+    layers.push_back({{"name", layer.name}, {"objects", layer.objects},
+                      {"color_rgba", layer.color_rgba}});
+  j["layers"] = layers;
+  return j;
+}
+
+std::string mib(uint64_t bytes) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f MiB", double(bytes) / (1024.0 * 1024.0));
+  return buf;
+}
+
+void printPackage(const PackageSummary& s, double seconds) {
+  using ull = unsigned long long;
+  std::printf("file        %s (twk %u.%u, %llu bytes, %s)\n", s.file.c_str(), s.version,
+              s.minor_version, ull(s.file_bytes), mib(s.file_bytes).c_str());
+  std::printf("origin      (%.3f, %.3f, %.3f) m, position step %.3g m\n", s.origin.x, s.origin.y,
+              s.origin.z, s.position_step_m);
+  const glm::vec3 e = s.bounds_max - s.bounds_min;
+  std::printf("bounds      min (%.3f, %.3f, %.3f) max (%.3f, %.3f, %.3f) size %.3f x %.3f x "
+              "%.3f\n",
+              s.bounds_min.x, s.bounds_min.y, s.bounds_min.z, s.bounds_max.x, s.bounds_max.y,
+              s.bounds_max.z, e.x, e.y, e.z);
+  std::printf("triangles   %llu input (level 0), %llu over all levels (%.2fx); %.2f bytes per "
+              "input triangle\n",
+              ull(s.total_triangles), ull(s.all_level_triangles),
+              s.total_triangles ? double(s.all_level_triangles) / double(s.total_triangles) : 0.0,
+              s.bytesPerInputTriangle());
+  std::printf("dag         %u levels, %llu clusters (largest %u triangles), %llu groups\n",
+              s.level_count, ull(s.clusters), s.max_cluster_triangles, ull(s.groups));
+  std::printf("  %5s %10s %14s %8s %8s %8s %12s %12s %12s %12s\n", "level", "clusters",
+              "triangles", "param", "groups", "roots", "err min m", "err mean m", "err max m",
+              "encoded");
+  for (const PackageLevelSummary& l : s.levels)
+    std::printf("  %5u %10llu %14llu %8llu %8llu %8llu %12.4g %12.4g %12.4g %12s\n", l.level,
+                ull(l.clusters), ull(l.triangles), ull(l.parametric_clusters), ull(l.groups),
+                ull(l.roots), double(l.min_error_m), l.mean_error_m, double(l.max_error_m),
+                mib(l.encoded_bytes).c_str());
+  std::printf("pages       %llu (%llu zstd), stored %s, raw %s (%.1f%%), target %u bytes\n",
+              ull(s.pages), ull(s.pages_compressed), mib(s.page_stored_bytes).c_str(),
+              mib(s.page_raw_bytes).c_str(),
+              s.page_raw_bytes ? 100.0 * double(s.page_stored_bytes) / double(s.page_raw_bytes)
+                               : 100.0,
+              s.target_page_bytes);
+  std::printf("sections   ");
+  for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
+    if (s.section_bytes[i]) std::printf(" %s %llu", pkg::kSectionNames[i], ull(s.section_bytes[i]));
+  std::printf("\n");
+  if (s.instances) {
+    std::printf("instances   %llu:", ull(s.instances));
+    for (uint32_t t = 0; t < pkg::kPrimitiveTypeCount; ++t)
+      if (s.instances_by_type[t])
+        std::printf(" %s %llu", packagePrimitiveTypeName(t), ull(s.instances_by_type[t]));
+    std::printf("\n");
+  }
+  std::printf("objects     %llu (%llu with a database key)\n", ull(s.objects),
+              ull(s.objects_with_db_key));
+  std::printf("layers      %zu\n", s.layers.size());
+  for (const auto& layer : s.layers)
+    std::printf("  %-24s %10llu objects\n", layer.name.c_str(), ull(layer.objects));
+  std::printf("read in     %.2f s\n", seconds);
+}
+
+void infoPackage(const std::string& file, bool json) {
+  const auto start = std::chrono::steady_clock::now();
+  // Headers only: info reads the tables, never the page data (verify checks that).
+  PackageView view = PackageView::open(file, PackageView::Verify::Headers);
+  PackageSummary summary = summarizePackage(view);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (json)
+    std::cout << packageToJson(summary).dump(2) << "\n";
+  else
+    printPackage(summary, seconds);
+}
+
 }  // namespace
 
 void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
   auto options = std::make_shared<InfoOptions>();
-  CLI::App* cmd = app.add_subcommand("info", "Print what a scene file holds");
-  cmd->add_option("file", options->file, "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb)")
+  CLI::App* cmd = app.add_subcommand("info", "Print what a scene file or package holds");
+  cmd->add_option("file", options->file,
+                  "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb) or package (.twk)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", options->json, "Machine-readable output");
@@ -114,6 +259,10 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
                   "Chordal tolerance for tessellated-equivalent triangle counts (scene units)")
       ->check(CLI::PositiveNumber);
   cmd->callback([options, &global] {
+    if (isPackageFile(options->file)) {
+      infoPackage(options->file, options->json);
+      return;
+    }
     auto progress = makeCommandProgress(global);
     SceneStats stats(options->tolerance);
     ReadOptions read;

@@ -13,7 +13,9 @@ int main(int argc, char** argv) {
   app.fallthrough();  // --quiet may also follow the verb
   tw::registerGenCommand(app, global);
   tw::registerInfoCommand(app, global);
+  tw::registerPreprocessCommand(app, global);
   tw::registerSnapshotCommand(app, global);
+  tw::registerVerifyCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -1,0 +1,105 @@
+// `terawalk preprocess INPUT... -o model.twk`: the offline build of a walkable package.
+#include <cctype>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include "command.h"
+#include "preprocess_driver.h"
+
+namespace tw {
+namespace {
+
+// "2G", "512M", "1.5GiB", "800000000" -> bytes (powers of 1024 for suffixes).
+uint64_t parseByteSize(const std::string& text) {
+  size_t used = 0;
+  double value = 0.0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  std::string suffix = text.substr(used);
+  for (char& c : suffix) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  double scale = 0.0;
+  if (suffix.empty() || suffix == "B") scale = 1.0;
+  else if (suffix == "K" || suffix == "KB" || suffix == "KIB") scale = 1024.0;
+  else if (suffix == "M" || suffix == "MB" || suffix == "MIB") scale = 1024.0 * 1024.0;
+  else if (suffix == "G" || suffix == "GB" || suffix == "GIB") scale = 1024.0 * 1024.0 * 1024.0;
+  if (used == 0 || scale == 0.0 || !(value > 0.0) || value * scale > 1e15)
+    throw std::runtime_error("--memory-budget: expected a size such as 2G or 512M, got '" + text +
+                             "'");
+  return static_cast<uint64_t>(value * scale);
+}
+
+struct PreprocessArgs {
+  std::vector<std::string> inputs;
+  std::string output;
+  std::string memory_budget = "2G";
+  uint32_t threads = 0;
+  uint32_t cluster_size = 256;
+  uint64_t brick_triangles = 0;
+  bool resume = false;
+  bool keep_work = false;
+};
+
+void printSummary(const PreprocessReport& r, const std::string& output) {
+  std::printf("preprocess: %s\n", output.c_str());
+  std::printf("  input       %llu triangles, %llu parametric instances, %llu objects\n",
+              static_cast<unsigned long long>(r.input_triangles),
+              static_cast<unsigned long long>(r.primitives),
+              static_cast<unsigned long long>(r.objects));
+  std::printf("  bricks      %u (%u reused%s)\n", r.bricks, r.bricks_reused,
+              r.bricking_reused ? ", bricking reused" : "");
+  std::printf("  levels      %zu:", r.triangles_per_level.size());
+  for (uint64_t t : r.triangles_per_level) std::printf(" %llu", static_cast<unsigned long long>(t));
+  std::printf(" triangles (root %llu)\n", static_cast<unsigned long long>(r.root_triangles));
+  std::printf("  clusters    %llu mesh, %llu parametric\n",
+              static_cast<unsigned long long>(r.clusters),
+              static_cast<unsigned long long>(r.parametric_clusters));
+  for (const StageTime& s : r.stages) std::printf("  %-12s%8.2f s\n", s.name.c_str(), s.seconds);
+  std::printf("  total       %8.2f s, %.2f M input triangles/s\n", r.seconds,
+              r.seconds > 0 ? double(r.input_triangles) / r.seconds / 1e6 : 0.0);
+  std::printf("  peak memory %.1f MiB\n", double(r.peak_rss_bytes) / (1024.0 * 1024.0));
+  std::printf("  package     %llu bytes, %.2f bytes per input triangle\n",
+              static_cast<unsigned long long>(r.package_bytes),
+              r.input_triangles ? double(r.package_bytes) / double(r.input_triangles) : 0.0);
+}
+
+}  // namespace
+
+void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
+  auto args = std::make_shared<PreprocessArgs>();
+  CLI::App* cmd = app.add_subcommand("preprocess", "Build a walkable package from scene files");
+  cmd->add_option("inputs", args->inputs, "Scene files (.tws, .ply, .obj, .stl, .gltf, .glb)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("-o,--output", args->output, "Package to write (.twk)")->required();
+  cmd->add_option("--memory-budget", args->memory_budget,
+                  "Host memory for the build, e.g. 2G or 512M (default 2G)");
+  cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)");
+  cmd->add_option("--cluster-size", args->cluster_size,
+                  "Triangles per cluster, 64-4096 (default 256)");
+  cmd->add_option("--brick-triangles", args->brick_triangles,
+                  "Most triangles per brick (default: derived from the memory budget)");
+  cmd->add_flag("--resume", args->resume,
+                "Continue a killed run with the same arguments from its finished bricks");
+  cmd->add_flag("--keep-work", args->keep_work, "Keep the work directory <output>.work");
+  cmd->callback([args, &global] {
+    auto progress = makeCommandProgress(global);
+    PreprocessOptions options;
+    for (const auto& input : args->inputs) options.inputs.emplace_back(input);
+    options.output = args->output;
+    options.memory_budget_bytes = parseByteSize(args->memory_budget);
+    options.threads = args->threads;
+    options.cluster_size = args->cluster_size;
+    options.max_brick_triangles = args->brick_triangles;
+    options.resume = args->resume;
+    options.keep_work_dir = args->keep_work;
+    options.progress = progress.get();
+    PreprocessReport report = runPreprocess(options);
+    printSummary(report, args->output);
+  });
+}
+
+}  // namespace tw
