@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The main job, end to end, on a fresh Debian 12 machine: install missing packages, build Release,
-# generate a sample plant, inspect it, take ray-cast snapshots and write a report under out/.
-# Grows into preprocess -> headless walkthrough -> report as those stages land.
+# generate a sample plant, inspect it, preprocess it into a package, verify the package, take
+# ray-cast snapshots and write a report under out/. The headless walkthrough joins when the runtime
+# lands.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -18,6 +19,9 @@ $tw gen plant --triangles "$triangles" --seed 1 -o "$out/plant.tws" --db "$out/p
   --mesh "$out/plant.ply" | tee "$out/gen.txt"
 $tw info "$out/plant.tws" | tee "$out/info.txt"
 $tw info --json "$out/plant.tws" > "$out/info.json"
+$tw preprocess "$out/plant.tws" -o "$out/plant.twk" | tee "$out/preprocess.txt"
+$tw verify "$out/plant.twk" | tee "$out/verify.txt"
+$tw info "$out/plant.twk" | tee "$out/package.txt"
 $tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" --azimuth 210 --elevation 30 \
   | tee "$out/snapshot.txt"
 # A view from inside the first module's second storey (modules start at the site origin).
@@ -31,6 +35,8 @@ $tw snapshot "$out/plant.tws" --out "$out/plant-inside.png" --eye 36,-16,13.7 --
   echo
   echo "## Generation"; echo; echo '```'; cat "$out/gen.txt"; echo '```'
   echo "## Scene"; echo; echo '```'; cat "$out/info.txt"; echo '```'
+  echo "## Preprocess"; echo; echo '```'; cat "$out/preprocess.txt"; echo '```'
+  echo "## Package"; echo; echo '```'; cat "$out/verify.txt" "$out/package.txt"; echo '```'
   echo "## Snapshot"; echo; echo '```'; cat "$out/snapshot.txt"; echo '```'
   echo; echo "![outside](plant-outside.png)"
   echo; echo "![inside a deck](plant-inside.png)"
