@@ -159,6 +159,13 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
   const SnappedDag snapped = snapToSharedGrids(dag, storage.position_step_m);
   placement.max_shift = snapped.max_shift;
   placement.coarsened_vertices = snapped.coarsened_vertices;
+  // Snapping moves a vertex by up to half a cell of the coarsest grid, which can carry it just
+  // outside the lod spheres the DAG computed from unsnapped positions. Every lod sphere grows by
+  // that much: the same amount everywhere, so siblings still share their spheres exactly and a
+  // parent's sphere still contains its children's.
+  const float lod_slack =
+      static_cast<float>(quantizationErrorM(storage.position_step_m, snapped.max_shift));
+  placement.lod_slack = lod_slack;
   ClusterEncodeOptions encode_options;
   encode_options.position_step_m = storage.position_step_m;
   std::vector<std::vector<uint8_t>> encoded;
@@ -199,9 +206,9 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
       const float lod_radius = has_lod ? cl.lod_radius : info.radius;
       const bool has_parent = cl.parent_lod_radius > 0.0f;
       setVec3(r.lod_center, lod_center);
-      r.lod_radius = lod_radius;
+      r.lod_radius = lod_radius + lod_slack;
       setVec3(r.parent_lod_center, has_parent ? cl.parent_lod_center : lod_center);
-      r.parent_lod_radius = has_parent ? cl.parent_lod_radius : lod_radius;
+      r.parent_lod_radius = (has_parent ? cl.parent_lod_radius : lod_radius) + lod_slack;
       r.group = rebase(cl.group, placement.first_group);
       r.parent_group = rebase(cl.parent_group, placement.first_group);
       r.level = static_cast<uint16_t>(cl.level);
@@ -219,7 +226,7 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
   for (const DagGroup& g : dag.groups) {
     GroupRecord r{};
     setVec3(r.lod_center, g.sphere_center);
-    r.lod_radius = g.sphere_radius;
+    r.lod_radius = g.sphere_radius + lod_slack;
     r.error = g.error;
     r.level = g.level;
     const std::vector<uint32_t>& boxed = g.clusters.empty() ? g.children : g.clusters;

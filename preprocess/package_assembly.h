@@ -18,6 +18,7 @@ struct DagPlacement {
   uint64_t encoded_bytes = 0;  // encoded cluster bytes placed in pages (before zstd, no padding)
   uint32_t max_shift = 0;      // largest quantization shift (cell = step * 2^shift)
   uint64_t coarsened_vertices = 0;  // distinct positions snapped coarser than their finest cluster
+  float lod_slack = 0.0f;  // metres added to every lod sphere: the largest snap displacement
 };
 
 // Appends every cluster of `dag` as a mesh cluster (in DAG order, so each group's produced

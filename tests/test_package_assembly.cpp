@@ -168,8 +168,8 @@ double roundTrip(const char* name, const Model& model) {
     EXPECT_EQ(r.parent_error, d.parent_error);
     EXPECT_EQ(r.group, d.group == tw::kNoGroup ? tw::pkg::kNone : d.group);
     EXPECT_EQ(r.parent_group, d.parent_group == tw::kNoGroup ? tw::pkg::kNone : d.parent_group);
-    EXPECT_EQ(r.lod_radius, d.lod_radius);
-    EXPECT_EQ(r.parent_lod_radius, d.parent_lod_radius);
+    EXPECT_EQ(r.lod_radius, d.lod_radius + placement.lod_slack);
+    EXPECT_EQ(r.parent_lod_radius, d.parent_lod_radius + placement.lod_slack);
     EXPECT_EQ(glm::vec3(r.lod_center[0], r.lod_center[1], r.lod_center[2]), d.lod_center);
     // Decoded geometry stays within quantization error of the DAG's (a shared vertex is on the
     // grid of the coarsest cluster using it, see package_assembly.h).
@@ -195,7 +195,7 @@ double roundTrip(const char* name, const Model& model) {
     if (!d.clusters.empty()) {
       EXPECT_EQ(r.first_cluster, d.clusters[0]);
     }
-    EXPECT_EQ(r.lod_radius, d.sphere_radius);
+    EXPECT_EQ(r.lod_radius, d.sphere_radius + placement.lod_slack);
   }
 
   // Cuts of the decoded package, welded by exact position: boundary edges beyond the input's own
