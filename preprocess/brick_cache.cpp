@@ -12,6 +12,7 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include "byte_packing.h"
 #include "file_reader.h"
 #include "format_error.h"
 
@@ -31,55 +32,6 @@ uint64_t payloadChecksum(std::span<const uint8_t> bytes) {
   static const uint8_t kEmpty = 0;
   return XXH3_64bits(bytes.empty() ? &kEmpty : bytes.data(), bytes.size());
 }
-
-// Byte packing for the description: fixed-width host-order values, length-prefixed strings.
-class ByteWriter {
- public:
-  template <typename T>
-  void put(const T& v) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
-  }
-  void putString(const std::string& s) {
-    put(static_cast<uint32_t>(s.size()));
-    bytes.insert(bytes.end(), s.begin(), s.end());
-  }
-  std::vector<uint8_t> bytes;
-};
-
-class ByteReader {
- public:
-  ByteReader(std::span<const uint8_t> bytes, const std::string& source)
-      : bytes_(bytes), source_(source) {}
-  template <typename T>
-  T get() {
-    need(sizeof(T));
-    T v;
-    std::memcpy(&v, bytes_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return v;
-  }
-  std::string getString() {
-    uint32_t n = get<uint32_t>();
-    need(n);
-    std::string s(reinterpret_cast<const char*>(bytes_.data() + at_), n);
-    at_ += n;
-    return s;
-  }
-  uint64_t remaining() const { return bytes_.size() - at_; }
-  void need(uint64_t n) const {
-    if (n > remaining())
-      fail("needs " + std::to_string(n) + " bytes, " + std::to_string(remaining()) + " left");
-  }
-  [[noreturn]] void fail(const std::string& reason) const {
-    throw FormatError::atByte(source_, at_, reason);
-  }
-
- private:
-  std::span<const uint8_t> bytes_;
-  const std::string& source_;
-  size_t at_ = 0;
-};
 
 }  // namespace
 

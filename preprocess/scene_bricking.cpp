@@ -15,6 +15,7 @@
 #define XXH_INLINE_ALL
 #include <xxhash.h>
 
+#include "byte_packing.h"
 #include "file_reader.h"
 #include "format_error.h"
 #include "position_key.h"
@@ -155,61 +156,6 @@ class SpillReader {
   FileReader reader_;
   SpillTrailer trailer_{};
   XXH3_state_t hash_;
-};
-
-// --- Little-endian byte packing for variable-size records and the scene description ---
-
-class ByteWriter {
- public:
-  template <typename T>
-  void put(const T& v) {
-    const auto* p = reinterpret_cast<const uint8_t*>(&v);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
-  }
-  void putString(const std::string& s) {
-    put(static_cast<uint32_t>(s.size()));
-    bytes.insert(bytes.end(), s.begin(), s.end());
-  }
-  void putVec2s(const std::vector<glm::vec2>& v) {
-    put(static_cast<uint32_t>(v.size()));
-    for (const auto& p : v) put(p);
-  }
-  std::vector<uint8_t> bytes;
-};
-
-class ByteReader {
- public:
-  ByteReader(std::span<const uint8_t> bytes, std::string source, uint64_t base)
-      : bytes_(bytes), source_(std::move(source)), base_(base) {}
-  template <typename T>
-  T get() {
-    need(sizeof(T));
-    T v;
-    std::memcpy(&v, bytes_.data() + at_, sizeof(T));
-    at_ += sizeof(T);
-    return v;
-  }
-  std::vector<glm::vec2> getVec2s() {
-    uint32_t n = get<uint32_t>();
-    need(uint64_t{n} * sizeof(glm::vec2));
-    std::vector<glm::vec2> v(n);
-    for (auto& p : v) p = get<glm::vec2>();
-    return v;
-  }
-  uint64_t remaining() const { return bytes_.size() - at_; }
-  void need(uint64_t n) const {
-    if (n > remaining())
-      fail("needs " + std::to_string(n) + " bytes, " + std::to_string(remaining()) + " left");
-  }
-  [[noreturn]] void fail(const std::string& reason) const {
-    throw FormatError::atByte(source_, base_ + at_, reason);
-  }
-
- private:
-  std::span<const uint8_t> bytes_;
-  std::string source_;
-  uint64_t base_;
-  size_t at_ = 0;
 };
 
 void putPrimitive(ByteWriter& w, const Primitive& primitive) {

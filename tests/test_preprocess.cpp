@@ -5,6 +5,8 @@
 
 #include <stdexcept>
 
+#include "cluster_dag.h"
+#include "dag_serialization.h"
 #include "package_view.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
@@ -159,6 +161,45 @@ TEST(Preprocess, ResumeWithOtherOptionsStartsOver) {
   PreprocessReport report = runPreprocess(second);
   EXPECT_EQ(report.bricks_reused, 0u);
   EXPECT_FALSE(report.bricking_reused && report.bricks_reused > 0);
+}
+
+// The resume store's DAG blobs: exact round trip, and damage is an error, never a crash.
+TEST(Preprocess, DagSerializationRoundTripsAndRejectsDamage) {
+  std::vector<glm::vec3> positions;
+  std::vector<uint32_t> indices, ids;
+  constexpr uint32_t n = 40;
+  for (uint32_t y = 0; y <= n; ++y)
+    for (uint32_t x = 0; x <= n; ++x)
+      positions.push_back({float(x), float(y), 0.3f * std::sin(0.4f * float(x + y))});
+  for (uint32_t y = 0; y < n; ++y)
+    for (uint32_t x = 0; x < n; ++x) {
+      uint32_t a = y * (n + 1) + x, b = a + 1, c = a + n + 1, d = c + 1;
+      indices.insert(indices.end(), {a, b, d, a, d, c});
+      ids.insert(ids.end(), {x / 10, x / 10});
+    }
+  ClusterDag dag = buildClusterDag(DagInput{positions, indices, ids}, DagOptions{});
+  ASSERT_GT(dag.groups.size(), 0u);
+  std::vector<uint8_t> bytes = serializeClusterDag(dag);
+  ClusterDag back = deserializeClusterDag(bytes);
+  EXPECT_EQ(serializeClusterDag(back), bytes);
+  ASSERT_EQ(back.clusters.size(), dag.clusters.size());
+  EXPECT_EQ(back.clusters.back().positions, dag.clusters.back().positions);
+  EXPECT_EQ(back.triangles_per_level, dag.triangles_per_level);
+
+  int rejected = 0, attempts = 0;
+  for (size_t cut = 0; cut < bytes.size(); cut += 1 + bytes.size() / 400) {
+    ++attempts;
+    try {
+      deserializeClusterDag(std::span<const uint8_t>(bytes.data(), cut), "dag.bin");
+    } catch (const FormatError& e) {
+      ++rejected;
+      EXPECT_NE(std::string(e.what()).find("dag.bin"), std::string::npos);
+    }
+  }
+  EXPECT_EQ(rejected, attempts) << "every truncation must be rejected";
+  std::vector<uint8_t> bad = bytes;
+  bad[0] ^= 0xff;
+  EXPECT_THROW(deserializeClusterDag(bad), FormatError);
 }
 
 TEST(Preprocess, RejectsBadArguments) {
