@@ -40,7 +40,8 @@ nlohmann::json infoJson(const std::filesystem::path& file) {
 }
 
 TEST(Cli, HelpOnEveryVerb) {
-  for (const char* verb : {"", "info ", "gen ", "gen plant ", "snapshot "}) {
+  for (const char* verb :
+       {"", "info ", "gen ", "gen plant ", "snapshot ", "preprocess ", "verify "}) {
     RunResult r = run(std::string(verb) + "--help");
     EXPECT_EQ(r.exit_code, 0) << verb << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << verb << r.output;
@@ -201,6 +202,35 @@ TEST(Cli, VerifyAndInfoOnAPackage) {
   RunResult junk = run("verify --quiet " + (dir / "scene.twk").string());
   EXPECT_EQ(junk.exit_code, 1) << junk.output;
   EXPECT_NE(junk.output.find("FAILED (structure)"), std::string::npos) << junk.output;
+}
+
+}  // namespace
+}  // namespace tw
+
+namespace tw {
+namespace {
+
+// The preprocessor from the command line on a real CAD part: a package that verifies, whose
+// levels shrink, and whose level 0 holds every input triangle and object.
+TEST(Cli, PreprocessVerifyAndInfoOnTheKicadConnector) {
+  auto file = test::sharedDataDir() / "kicad_dsub62.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto twk = test::scratchDir() / "kicad.twk";
+  RunResult pre = run("preprocess --quiet " + file.string() + " -o " + twk.string());
+  ASSERT_EQ(pre.exit_code, 0) << pre.output;
+  EXPECT_NE(pre.output.find("bytes per input triangle"), std::string::npos) << pre.output;
+  RunResult verify = run("verify --quiet " + twk.string());
+  EXPECT_EQ(verify.exit_code, 0) << verify.output;
+  EXPECT_NE(verify.output.find("OK"), std::string::npos) << verify.output;
+  nlohmann::json j = infoJson(twk);
+  ASSERT_GE(j["levels"].size(), 3u);
+  EXPECT_EQ(j["levels"][0]["triangles"], 94176);
+  EXPECT_EQ(j["objects"], 648);
+  for (size_t level = 1; level < j["levels"].size(); ++level)
+    EXPECT_LE(j["levels"][level]["triangles"].get<double>(),
+              0.6 * j["levels"][level - 1]["triangles"].get<double>())
+        << "level " << level;
+  EXPECT_LE(j["bytes_per_input_triangle"].get<double>(), 24.0);
 }
 
 }  // namespace
