@@ -6,8 +6,6 @@
 #include <cmath>
 #include <numeric>
 #include <stdexcept>
-#include <unordered_map>
-#include <unordered_set>
 
 #include <meshoptimizer.h>
 #include <metis.h>
@@ -30,14 +28,92 @@ uint64_t edgeKey(uint32_t a, uint32_t b) {
   return (uint64_t(a) << 32) | b;
 }
 
-using EdgeCounts = std::unordered_map<uint64_t, uint32_t>;
+// Edge triangle counts as a vector sorted by key: sorting a flat key list is several times
+// cheaper than a hash map built and freed per candidate, and lookups are binary searches.
+struct EdgeCount {
+  uint64_t key;
+  uint32_t count;
+};
+using EdgeCounts = std::vector<EdgeCount>;
 
-EdgeCounts countEdges(const std::vector<uint32_t>& tris) {
+// Per-thread scratch: processGroup runs once per group per candidate level, so reusing the
+// buffers removes most of the allocator traffic.
+struct EdgeScratch {
+  std::vector<uint64_t> keys;
+  std::vector<uint64_t> unsorted;
+  std::vector<uint32_t> offsets;
+};
+EdgeScratch& edgeScratch() {
+  thread_local EdgeScratch scratch;
+  return scratch;
+}
+
+// Sorts edge keys (vertices below vertex_count) from unsorted into keys: a counting sort on the
+// smaller vertex, then each vertex's few keys sorted; the same order as a full sort, at a
+// fraction of the cost. offsets is scratch.
+void bucketSortEdgeKeys(const std::vector<uint64_t>& unsorted, size_t vertex_count,
+                        std::vector<uint64_t>& keys, std::vector<uint32_t>& offsets) {
+  offsets.assign(vertex_count + 1, 0);
+  for (uint64_t k : unsorted) ++offsets[size_t(k >> 32) + 1];
+  for (size_t v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  keys.resize(unsorted.size());
+  for (uint64_t k : unsorted) keys[offsets[size_t(k >> 32)]++] = k;
+  // offsets[v] now ends bucket v, so bucket v spans [offsets[v - 1], offsets[v]).
+  uint32_t begin = 0;
+  for (size_t v = 0; v < vertex_count; ++v) {
+    const uint32_t end = offsets[v];
+    if (end - begin > 16) {
+      std::sort(keys.begin() + begin, keys.begin() + end);
+    } else {
+      for (uint32_t i = begin + 1; i < end; ++i) {
+        uint64_t k = keys[i];
+        uint32_t j = i;
+        for (; j > begin && keys[j - 1] > k; --j) keys[j] = keys[j - 1];
+        keys[j] = k;
+      }
+    }
+    begin = end;
+  }
+}
+
+// The sorted edge keys of a triangle list (local vertices below vertex_count), one per triangle
+// side, duplicates kept, into keys.
+void sortedEdgeKeys(const std::vector<uint32_t>& tris, size_t vertex_count,
+                    std::vector<uint64_t>& keys) {
+  EdgeScratch& scratch = edgeScratch();
+  std::vector<uint64_t>& unsorted = scratch.unsorted;
+  unsorted.clear();
+  for (size_t t = 0; t + 2 < tris.size(); t += 3) {
+    unsorted.push_back(edgeKey(tris[t], tris[t + 1]));
+    unsorted.push_back(edgeKey(tris[t + 1], tris[t + 2]));
+    unsorted.push_back(edgeKey(tris[t + 2], tris[t]));
+  }
+  bucketSortEdgeKeys(unsorted, vertex_count, keys, scratch.offsets);
+}
+
+EdgeCounts countEdges(const std::vector<uint32_t>& tris, size_t vertex_count) {
+  std::vector<uint64_t>& keys = edgeScratch().keys;
+  sortedEdgeKeys(tris, vertex_count, keys);
   EdgeCounts counts;
-  counts.reserve(tris.size() * 2);
-  for (size_t t = 0; t + 2 < tris.size(); t += 3)
-    for (int k = 0; k < 3; ++k) ++counts[edgeKey(tris[t + k], tris[t + (k + 1) % 3])];
+  counts.reserve(keys.size() / 2 + 1);
+  for (size_t i = 0; i < keys.size();) {
+    size_t j = i + 1;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    counts.push_back({keys[i], uint32_t(j - i)});
+    i = j;
+  }
   return counts;
+}
+
+// The count of edge e in counts, 0 when absent.
+uint32_t edgeCount(const EdgeCounts& counts, uint64_t e) {
+  auto it = std::lower_bound(counts.begin(), counts.end(), e,
+                             [](const EdgeCount& c, uint64_t key) { return c.key < key; });
+  return it != counts.end() && it->key == e ? it->count : 0u;
+}
+
+bool containsSorted(const std::vector<uint64_t>& sorted, uint64_t e) {
+  return std::binary_search(sorted.begin(), sorted.end(), e);
 }
 
 // The crack-freedom rule every candidate must pass: each edge shared with another group keeps its
@@ -48,16 +124,18 @@ EdgeCounts countEdges(const std::vector<uint32_t>& tris) {
 // simplification. Where a neighbour joins the same two vertices on its side, a cut holds a pinch:
 // an edge with four triangles (two opposite slivers), closed but not manifold. No hole appears.
 bool borderPreserved(const EdgeCounts& in, const std::vector<uint64_t>& shared,
-                     const std::vector<uint32_t>& out_tris) {
-  EdgeCounts out = countEdges(out_tris);
+                     const std::vector<uint32_t>& out_tris, size_t vertex_count) {
+  std::vector<uint64_t>& keys = edgeScratch().keys;
+  sortedEdgeKeys(out_tris, vertex_count, keys);
   for (uint64_t e : shared) {
-    auto it = out.find(e);
-    if ((it == out.end() ? 0u : it->second) != in.at(e)) return false;
+    auto [lo, hi] = std::equal_range(keys.begin(), keys.end(), e);
+    if (uint32_t(hi - lo) != edgeCount(in, e)) return false;
   }
-  for (const auto& [e, count] : out) {
-    if (count != 1) continue;
-    auto it = in.find(e);
-    if (it == in.end() || it->second != 1) return false;
+  for (size_t i = 0; i < keys.size();) {
+    size_t j = i + 1;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    if (j - i == 1 && edgeCount(in, keys[i]) != 1) return false;
+    i = j;
   }
   return true;
 }
@@ -89,17 +167,22 @@ struct WorkCluster {
   std::vector<uint32_t> ids;
 };
 
-DagCluster makeCluster(const std::vector<glm::vec3>& positions, const WorkCluster& work) {
+// tris index positions; vertices are numbered in order of first use. slot: one entry per
+// position, all kUnowned on entry and on return (scratch, so a cluster costs its own size rather
+// than a hash map).
+DagCluster makeCluster(std::span<const glm::vec3> positions, std::span<const uint32_t> tris,
+                       const std::vector<uint32_t>& ids, std::vector<uint32_t>& slot) {
   DagCluster c;
-  std::unordered_map<uint32_t, uint32_t> local;
-  local.reserve(work.tris.size());
-  c.indices.reserve(work.tris.size());
-  for (uint32_t v : work.tris) {
-    auto [it, inserted] = local.emplace(v, static_cast<uint32_t>(c.positions.size()));
-    if (inserted) c.positions.push_back(positions[v]);
-    c.indices.push_back(it->second);
+  c.indices.reserve(tris.size());
+  for (uint32_t v : tris) {
+    if (slot[v] == kUnowned) {
+      slot[v] = static_cast<uint32_t>(c.positions.size());
+      c.positions.push_back(positions[v]);
+    }
+    c.indices.push_back(slot[v]);
   }
-  c.triangle_object_ids = work.ids;
+  for (uint32_t v : tris) slot[v] = kUnowned;
+  c.triangle_object_ids = ids;
   c.box_min = glm::vec3(INFINITY);
   c.box_max = glm::vec3(-INFINITY);
   for (const glm::vec3& p : c.positions) {
@@ -118,20 +201,24 @@ DagCluster makeCluster(const std::vector<glm::vec3>& positions, const WorkCluste
 // Per vertex: the most frequent object id among the triangles using it (ties: the smaller id).
 std::vector<uint32_t> vertexObjectIds(const std::vector<uint32_t>& tris,
                                       const std::vector<uint32_t>& ids, size_t vertex_count) {
-  std::vector<uint64_t> pairs;
-  pairs.reserve(tris.size());
-  for (size_t i = 0; i < tris.size(); ++i) pairs.push_back((uint64_t(tris[i]) << 32) | ids[i / 3]);
-  std::sort(pairs.begin(), pairs.end());
+  // Bucket the corners by vertex (counting sort), then sort each vertex's few ids.
+  std::vector<uint32_t> offsets(vertex_count + 1, 0);
+  for (uint32_t v : tris) ++offsets[v + 1];
+  for (size_t v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+  std::vector<uint32_t> corner_ids(tris.size());
+  for (size_t i = 0; i < tris.size(); ++i) corner_ids[fill[tris[i]]++] = ids[i / 3];
   std::vector<uint32_t> result(vertex_count, 0);
-  for (size_t i = 0; i < pairs.size();) {
-    uint32_t v = uint32_t(pairs[i] >> 32);
+  for (size_t v = 0; v < vertex_count; ++v) {
+    auto first = corner_ids.begin() + offsets[v], last = corner_ids.begin() + offsets[v + 1];
+    std::sort(first, last);
     size_t best_run = 0;
-    while (i < pairs.size() && uint32_t(pairs[i] >> 32) == v) {
-      size_t j = i;
-      while (j < pairs.size() && pairs[j] == pairs[i]) ++j;
-      if (j - i > best_run) {
-        best_run = j - i;
-        result[v] = uint32_t(pairs[i]);
+    for (auto i = first; i != last;) {
+      auto j = i + 1;
+      while (j != last && *j == *i) ++j;
+      if (size_t(j - i) > best_run) {
+        best_run = size_t(j - i);
+        result[v] = *i;
       }
       i = j;
     }
@@ -168,9 +255,9 @@ struct UnionFind {
 struct LevelContext {
   const std::vector<glm::vec3>& positions;
   const std::vector<uint32_t>& vertex_owner;      // group id, or kMulti
-  const std::unordered_set<uint64_t>& shared_edges;  // global edges used by several groups
+  const std::vector<uint64_t>& shared_edges;  // global edges used by several groups, sorted
   const std::vector<uint8_t>& open_vertex;         // on a locked open edge (lock_open_boundaries)
-  const std::unordered_set<uint64_t>& open_edges;  // locked open edges of the first front
+  const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
   const DagOptions& options;
 };
 
@@ -194,6 +281,31 @@ void append(std::vector<uint32_t>& to, const std::vector<uint32_t>& from) {
   to.insert(to.end(), from.begin(), from.end());
 }
 
+// Global vertex -> group-local index: open addressing sized to the group, so per-group memory
+// stays proportional to the group whatever the model size. A slot holds key << 32 | value.
+struct LocalIndexMap {
+  static constexpr uint64_t kEmpty = ~uint64_t(0);
+  std::vector<uint64_t> slots;
+  int shift = 32;
+
+  // Room for up to n keys at load factor <= 1/2.
+  void reset(size_t n) {
+    size_t bits = 4;
+    while ((size_t(1) << bits) < 2 * n) ++bits;
+    slots.assign(size_t(1) << bits, kEmpty);
+    shift = 32 - int(bits);
+  }
+  size_t find(uint32_t key) const {
+    const size_t mask = slots.size() - 1;
+    size_t i = shift >= 32 ? 0 : size_t((key * 2654435761u) >> shift);
+    while (slots[i] != kEmpty && uint32_t(slots[i] >> 32) != key) i = (i + 1) & mask;
+    return i;
+  }
+  void release() {
+    if (slots.size() > (size_t(1) << 20)) slots = {};  // a huge one-off group: give it back
+  }
+};
+
 GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster>& work,
                           const std::vector<uint32_t>& members) {
   const DagOptions& options = ctx.options;
@@ -206,12 +318,25 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     append(gtris, work[m].tris);
     append(gids, work[m].ids);
   }
-  std::vector<uint32_t> l2g = gtris;
+  // Local vertices in ascending global order (unique first, so only they are sorted).
+  thread_local LocalIndexMap to_local;
+  to_local.reset(gtris.size());
+  std::vector<uint32_t> l2g;
+  l2g.reserve(gtris.size() / 2 + 16);
+  for (uint32_t v : gtris) {
+    const size_t i = to_local.find(v);
+    if (to_local.slots[i] == LocalIndexMap::kEmpty) {
+      to_local.slots[i] = uint64_t(v) << 32;
+      l2g.push_back(v);
+    }
+  }
   std::sort(l2g.begin(), l2g.end());
-  l2g.erase(std::unique(l2g.begin(), l2g.end()), l2g.end());
+  for (size_t v = 0; v < l2g.size(); ++v)
+    to_local.slots[to_local.find(l2g[v])] = (uint64_t(l2g[v]) << 32) | v;
   std::vector<uint32_t> ltris(gtris.size());
   for (size_t i = 0; i < gtris.size(); ++i)
-    ltris[i] = uint32_t(std::lower_bound(l2g.begin(), l2g.end(), gtris[i]) - l2g.begin());
+    ltris[i] = uint32_t(to_local.slots[to_local.find(gtris[i])]);
+  to_local.release();
   std::vector<glm::vec3> lpos(l2g.size());
   for (size_t v = 0; v < l2g.size(); ++v) lpos[v] = ctx.positions[l2g[v]];
   const float* pos = &lpos[0].x;
@@ -224,16 +349,17 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     return isMulti(local) || (!ctx.open_vertex.empty() && ctx.open_vertex[l2g[local]]);
   };
 
-  const EdgeCounts in = countEdges(ltris);
+  const EdgeCounts in = countEdges(ltris, vcount);
   std::vector<uint64_t> shared;  // edges whose triangle count must not change
-  for (const auto& [e, count] : in) {
+  for (const EdgeCount& ec : in) {
+    const uint64_t e = ec.key;
     uint32_t a = uint32_t(e >> 32), b = uint32_t(e);
     const uint64_t global = edgeKey(l2g[a], l2g[b]);
-    if ((isMulti(a) && isMulti(b) && ctx.shared_edges.count(global)) ||
-        (!ctx.open_edges.empty() && ctx.open_edges.count(global)))
+    if ((isMulti(a) && isMulti(b) && containsSorted(ctx.shared_edges, global)) ||
+        (!ctx.open_edges.empty() && containsSorted(ctx.open_edges, global)))
       shared.push_back(e);
   }
-  std::sort(shared.begin(), shared.end());  // unordered_map order must not leak into results
+  // Already sorted: in is sorted by key.
   const std::vector<uint32_t> vertex_ids = vertexObjectIds(ltris, gids, vcount);
 
   const size_t n = gids.size();
@@ -252,7 +378,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
                                   meshopt_SimplifyLockBorder, &err);
   out.resize(count);
   if (count < ltris.size()) {
-    if (borderPreserved(in, shared, out)) {
+    if (borderPreserved(in, shared, out, vcount)) {
       auto ids = triangleObjectIds(out, vertex_ids);
       consider({std::move(out), std::move(ids), err * scale, GroupMethod::Locked});
     } else {
@@ -288,7 +414,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
                                  (btris.size() / 6) * 3, options.max_relative_error,
                                  meshopt_SimplifyLockBorder, &err);
         out.resize(count);
-        if (count < btris.size() && borderPreserved(in, shared, out)) {
+        if (count < btris.size() && borderPreserved(in, shared, out, vcount)) {
           rb_ids = triangleObjectIds(out, vertex_ids);
           rb = std::move(out);
           err_b = err * scale;
@@ -302,12 +428,18 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
       if (options.allow_sloppy) {
         // Sloppy picks each grid cell's representative among *all* vertices it is given, so it
         // gets the free components' vertices only: its output must not touch the border part.
-        std::vector<uint32_t> f2l(ftris);
+        // Free vertices in ascending order; l2f maps a group-local vertex to its place among them.
+        std::vector<uint32_t> l2f(vcount, kUnowned);
+        std::vector<uint32_t> f2l;
+        for (uint32_t v : ftris)
+          if (l2f[v] == kUnowned) {
+            l2f[v] = 0;
+            f2l.push_back(v);
+          }
         std::sort(f2l.begin(), f2l.end());
-        f2l.erase(std::unique(f2l.begin(), f2l.end()), f2l.end());
+        for (size_t v = 0; v < f2l.size(); ++v) l2f[f2l[v]] = uint32_t(v);
         std::vector<uint32_t> flocal(ftris.size());
-        for (size_t i = 0; i < ftris.size(); ++i)
-          flocal[i] = uint32_t(std::lower_bound(f2l.begin(), f2l.end(), ftris[i]) - f2l.begin());
+        for (size_t i = 0; i < ftris.size(); ++i) flocal[i] = l2f[ftris[i]];
         std::vector<glm::vec3> fpos(f2l.size());
         for (size_t v = 0; v < f2l.size(); ++v) fpos[v] = lpos[f2l[v]];
         std::vector<uint32_t> rf(ftris.size());
@@ -318,7 +450,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
         rf.resize(count);
         for (uint32_t& v : rf) v = f2l[v];
         const float f_scale = meshopt_simplifyScale(&fpos[0].x, fpos.size(), stride);
-        if (borderPreserved(in, no_shared, rf)) {
+        if (borderPreserved(in, no_shared, rf, vcount)) {
           Candidate c{rb, rb_ids, std::max(err_b, err_f * f_scale), GroupMethod::Sloppy};
           append(c.tris, rf);
           append(c.ids, triangleObjectIds(rf, vertex_ids));
@@ -336,21 +468,22 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
           uint32_t root;
           uint32_t triangles;
         };
-        std::unordered_map<uint32_t, size_t> slot;
+        std::vector<uint32_t> slot(vcount, kUnowned);  // component root -> index in parts
         std::vector<Component> parts;
         std::vector<glm::vec3> lo, hi;
         for (size_t t = 0; t < nf; ++t) {
           uint32_t root = components.find(ftris[3 * t]);
-          auto [it, inserted] = slot.emplace(root, parts.size());
-          if (inserted) {
+          if (slot[root] == kUnowned) {
+            slot[root] = uint32_t(parts.size());
             parts.push_back({0.0f, uint32_t(t), root, 0});
             lo.push_back(glm::vec3(INFINITY));
             hi.push_back(glm::vec3(-INFINITY));
           }
-          parts[it->second].triangles++;
+          const uint32_t part = slot[root];
+          parts[part].triangles++;
           for (int k = 0; k < 3; ++k) {
-            lo[it->second] = glm::min(lo[it->second], lpos[ftris[3 * t + k]]);
-            hi[it->second] = glm::max(hi[it->second], lpos[ftris[3 * t + k]]);
+            lo[part] = glm::min(lo[part], lpos[ftris[3 * t + k]]);
+            hi[part] = glm::max(hi[part], lpos[ftris[3 * t + k]]);
           }
         }
         for (size_t p = 0; p < parts.size(); ++p) parts[p].diagonal = glm::length(hi[p] - lo[p]);
@@ -358,18 +491,18 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
           return a.diagonal < b.diagonal ||
                  (a.diagonal == b.diagonal && a.first_triangle < b.first_triangle);
         });
-        std::unordered_set<uint32_t> dropped;
+        std::vector<uint8_t> dropped(vcount, 0);  // by component root
         size_t kept = nf;
         float dropped_error = 0.0f;
         for (size_t p = 0; p < parts.size() && kept > target_f; ++p) {
           if (p + 1 == parts.size() && nb == 0) break;  // a group never vanishes entirely
-          dropped.insert(parts[p].root);
+          dropped[parts[p].root] = 1;
           kept -= parts[p].triangles;
           dropped_error = std::max(dropped_error, parts[p].diagonal);
         }
         Candidate c{rb, rb_ids, std::max(err_b, dropped_error), GroupMethod::Dropped};
         for (size_t t = 0; t < nf; ++t) {
-          if (dropped.count(components.find(ftris[3 * t]))) continue;
+          if (dropped[components.find(ftris[3 * t])]) continue;
           c.tris.insert(c.tris.end(), ftris.begin() + 3 * t, ftris.begin() + 3 * t + 3);
           c.ids.push_back(fids[t]);
         }
@@ -386,7 +519,10 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   outcome.clusters.resize(split.clusterCount());
   for (size_t c = 0; c < split.clusterCount(); ++c) {
     WorkCluster& wc = outcome.clusters[c];
-    for (uint32_t i = split.offsets[c]; i < split.offsets[c + 1]; ++i) {
+    const uint32_t first = split.offsets[c], last = split.offsets[c + 1];
+    wc.tris.reserve(3 * size_t(last - first));
+    wc.ids.reserve(last - first);
+    for (uint32_t i = first; i < last; ++i) {
       uint32_t t = split.triangles[i];
       for (int k = 0; k < 3; ++k) wc.tris.push_back(l2g[best.tris[3 * t + k]]);
       wc.ids.push_back(best.ids[t]);
@@ -413,7 +549,7 @@ uint32_t morton3(glm::vec3 unit) {
 // fixed seed).
 std::vector<std::vector<uint32_t>> partitionClusters(const std::vector<WorkCluster>& work,
                                                      const std::vector<glm::vec3>& centers,
-                                                     uint32_t group_size) {
+                                                     uint32_t group_size, size_t vertex_count) {
   const size_t n = work.size();
   std::vector<std::vector<uint32_t>> groups;
   if (n <= group_size) {
@@ -423,21 +559,34 @@ std::vector<std::vector<uint32_t>> partitionClusters(const std::vector<WorkClust
   }
 
   // Clusters sharing vertices; weight = number of shared vertices (a proxy for border length).
-  std::vector<uint64_t> vertex_cluster;
+  // Per vertex, the clusters using it in ascending order: a counting sort by vertex (clusters
+  // are visited in order, and last_cluster drops repeats within one cluster).
+  std::vector<uint32_t> last_cluster(vertex_count, kUnowned);
+  std::vector<uint32_t> offsets(vertex_count + 1, 0);
   for (size_t c = 0; c < n; ++c)
-    for (uint32_t v : work[c].tris) vertex_cluster.push_back((uint64_t(v) << 32) | c);
-  std::sort(vertex_cluster.begin(), vertex_cluster.end());
-  vertex_cluster.erase(std::unique(vertex_cluster.begin(), vertex_cluster.end()),
-                       vertex_cluster.end());
-  std::unordered_map<uint64_t, uint32_t> weights;
-  for (size_t i = 0; i < vertex_cluster.size();) {
-    size_t j = i;
-    while (j < vertex_cluster.size() && (vertex_cluster[j] >> 32) == (vertex_cluster[i] >> 32)) ++j;
-    for (size_t a = i; a < j; ++a)
-      for (size_t b = a + 1; b < j; ++b)
-        ++weights[edgeKey(uint32_t(vertex_cluster[a]), uint32_t(vertex_cluster[b]))];
-    i = j;
+    for (uint32_t v : work[c].tris)
+      if (last_cluster[v] != uint32_t(c)) {
+        last_cluster[v] = uint32_t(c);
+        ++offsets[v + 1];
+      }
+  for (size_t v = 0; v < vertex_count; ++v) offsets[v + 1] += offsets[v];
+  std::vector<uint32_t> vertex_clusters(offsets[vertex_count]);
+  {
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    std::fill(last_cluster.begin(), last_cluster.end(), kUnowned);
+    for (size_t c = 0; c < n; ++c)
+      for (uint32_t v : work[c].tris)
+        if (last_cluster[v] != uint32_t(c)) {
+          last_cluster[v] = uint32_t(c);
+          vertex_clusters[fill[v]++] = uint32_t(c);
+        }
   }
+  // Edge weights: one key per shared vertex and cluster pair, counted after sorting.
+  std::vector<uint64_t> links;
+  for (size_t v = 0; v < vertex_count; ++v)
+    for (uint32_t a = offsets[v]; a < offsets[v + 1]; ++a)
+      for (uint32_t b = a + 1; b < offsets[v + 1]; ++b)
+        links.push_back(edgeKey(vertex_clusters[a], vertex_clusters[b]));
   // Weak links between neighbours in Morton order, so disconnected parts group by proximity.
   glm::vec3 lo(INFINITY), hi(-INFINITY);
   for (const glm::vec3& c : centers) {
@@ -449,12 +598,18 @@ std::vector<std::vector<uint32_t>> partitionClusters(const std::vector<WorkClust
   for (size_t c = 0; c < n; ++c) order[c] = {morton3((centers[c] - lo) / extent), uint32_t(c)};
   std::sort(order.begin(), order.end());
   for (size_t i = 0; i + 1 < n; ++i) {
-    ++weights[edgeKey(order[i].second, order[i + 1].second)];
-    if (i + 2 < n) ++weights[edgeKey(order[i].second, order[i + 2].second)];
+    links.push_back(edgeKey(order[i].second, order[i + 1].second));
+    if (i + 2 < n) links.push_back(edgeKey(order[i].second, order[i + 2].second));
   }
 
-  std::vector<std::pair<uint64_t, uint32_t>> edges(weights.begin(), weights.end());
-  std::sort(edges.begin(), edges.end());
+  std::sort(links.begin(), links.end());
+  std::vector<std::pair<uint64_t, uint32_t>> edges;
+  for (size_t i = 0; i < links.size();) {
+    size_t j = i + 1;
+    while (j < links.size() && links[j] == links[i]) ++j;
+    edges.emplace_back(links[i], uint32_t(j - i));
+    i = j;
+  }
   std::vector<idx_t> xadj(n + 1, 0);
   for (const auto& [key, w] : edges) {
     ++xadj[(key >> 32) + 1];
@@ -558,6 +713,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
   std::vector<std::vector<uint32_t>> front_tris;
   std::vector<uint32_t> front_ids;
   {
+    std::vector<uint32_t> slot(positions.size(), kUnowned);
     TriangleClusters split = clusterizeTriangles(positions, tris, options.cluster_size);
     for (size_t c = 0; c < split.clusterCount(); ++c) {
       WorkCluster wc;
@@ -567,7 +723,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
         wc.ids.push_back(ids[t]);
       }
       front_ids.push_back(uint32_t(dag.clusters.size()));
-      dag.clusters.push_back(makeCluster(positions, wc));
+      dag.clusters.push_back(makeCluster(positions, wc.tris, wc.ids, slot));
       front_tris.push_back(std::move(wc.tris));
     }
   }
@@ -597,21 +753,32 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
   // Open edges of the first front (used by exactly one triangle) are locked for good when asked:
   // they are brick seams another DAG must meet exactly.
   std::vector<uint8_t> open_vertex;
-  std::unordered_set<uint64_t> open_edges;
+  std::vector<uint64_t> open_edges;
   if (options.lock_open_boundaries) {
-    EdgeCounts counts;
-    for (const WorkCluster& wc : current_work)
-      for (size_t i = 0; i < wc.tris.size(); i += 3)
-        for (int k = 0; k < 3; ++k) ++counts[edgeKey(wc.tris[i + k], wc.tris[i + (k + 1) % 3])];
+    std::vector<uint64_t> unsorted, keys;
+    {
+      std::vector<uint32_t> offsets;
+      for (const WorkCluster& wc : current_work)
+        for (size_t i = 0; i < wc.tris.size(); i += 3)
+          for (int k = 0; k < 3; ++k)
+            unsorted.push_back(edgeKey(wc.tris[i + k], wc.tris[i + (k + 1) % 3]));
+      bucketSortEdgeKeys(unsorted, positions.size(), keys, offsets);
+      unsorted = {};
+    }
     open_vertex.assign(positions.size(), 0);
-    for (const auto& [e, count] : counts)
-      if (count == 1) {
-        open_edges.insert(e);
-        open_vertex[uint32_t(e >> 32)] = open_vertex[uint32_t(e)] = 1;
+    for (size_t i = 0; i < keys.size();) {
+      size_t j = i + 1;
+      while (j < keys.size() && keys[j] == keys[i]) ++j;
+      if (j - i == 1) {
+        open_edges.push_back(keys[i]);
+        open_vertex[uint32_t(keys[i] >> 32)] = open_vertex[uint32_t(keys[i])] = 1;
       }
+      i = j;
+    }
   }
 
   std::vector<uint32_t> vertex_owner(positions.size());
+  std::vector<uint32_t> slot(positions.size(), kUnowned);
   while (current_work.size() > 1) {
     uint64_t level_triangles = 0;
     uint32_t front_level = 0;
@@ -629,14 +796,19 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     bool shrunk = false;
     for (uint64_t group_size = options.group_size;; group_size *= 2) {
       groups = partitionClusters(current_work, centers,
-                                 uint32_t(std::min<uint64_t>(group_size, current_work.size())));
+                                 uint32_t(std::min<uint64_t>(group_size, current_work.size())),
+                                 positions.size());
       // Which vertices and edges are shared between groups: those are the locked borders.
-      std::fill(vertex_owner.begin(), vertex_owner.end(), kUnowned);
+      // Only the level's own vertices are ever read: reset those, not the whole model's.
+      for (const WorkCluster& wc : current_work)
+        for (uint32_t v : wc.tris) vertex_owner[v] = kUnowned;
       for (uint32_t g = 0; g < groups.size(); ++g)
         for (uint32_t m : groups[g])
           for (uint32_t v : current_work[m].tris)
             vertex_owner[v] = vertex_owner[v] == kUnowned || vertex_owner[v] == g ? g : kMulti;
-      std::unordered_map<uint64_t, uint32_t> edge_group;
+      // Edges between two multi-group vertices, with their group; an edge seen in two groups is
+      // shared. Sorted pairs instead of a hash map: the set is the same, the cost much lower.
+      std::vector<std::pair<uint64_t, uint32_t>> edge_group;
       for (uint32_t g = 0; g < groups.size(); ++g)
         for (uint32_t m : groups[g]) {
           const auto& t = current_work[m].tris;
@@ -644,13 +816,21 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
             for (int k = 0; k < 3; ++k) {
               uint32_t a = t[i + k], b = t[i + (k + 1) % 3];
               if (vertex_owner[a] != kMulti || vertex_owner[b] != kMulti) continue;
-              auto [it, inserted] = edge_group.emplace(edgeKey(a, b), g);
-              if (!inserted && it->second != g) it->second = kMulti;
+              edge_group.emplace_back(edgeKey(a, b), g);
             }
         }
-      std::unordered_set<uint64_t> shared_edges;
-      for (const auto& [e, g] : edge_group)
-        if (g == kMulti) shared_edges.insert(e);
+      std::sort(edge_group.begin(), edge_group.end());
+      std::vector<uint64_t> shared_edges;
+      for (size_t i = 0; i < edge_group.size();) {
+        size_t j = i + 1;
+        bool several = false;
+        while (j < edge_group.size() && edge_group[j].first == edge_group[i].first) {
+          several = several || edge_group[j].second != edge_group[i].second;
+          ++j;
+        }
+        if (several) shared_edges.push_back(edge_group[i].first);
+        i = j;
+      }
 
       LevelContext ctx{positions, vertex_owner, shared_edges, open_vertex, open_edges, options};
       outcomes.assign(groups.size(), GroupOutcome{});
@@ -699,7 +879,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
 
       std::vector<DagCluster> made;
       for (WorkCluster& wc : o.clusters) {
-        made.push_back(makeCluster(positions, wc));
+        made.push_back(makeCluster(positions, wc.tris, wc.ids, slot));
         spheres.push_back({made.back().sphere_center, made.back().sphere_radius});
       }
       Sphere bound = enclose(spheres);
