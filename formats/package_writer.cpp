@@ -89,6 +89,22 @@ class TempFile {
 
 }  // namespace
 
+void setClusterLod(pkg::ClusterRecord& r, const ClusterLod& lod, const glm::vec3& fallback_center,
+                   float fallback_radius) {
+  r.error = lod.error;
+  r.parent_error = lod.parent_error;
+  glm::vec4 sphere = lod.lod_sphere.w > 0.0f ? lod.lod_sphere
+                                             : glm::vec4(fallback_center, fallback_radius);
+  glm::vec4 parent = lod.parent_lod_sphere.w > 0.0f ? lod.parent_lod_sphere : sphere;
+  setVec3(r.lod_center, glm::vec3(sphere));
+  r.lod_radius = sphere.w;
+  setVec3(r.parent_lod_center, glm::vec3(parent));
+  r.parent_lod_radius = parent.w;
+  r.group = lod.group;
+  r.parent_group = lod.parent_group;
+  r.level = lod.level;
+}
+
 uint64_t PackageStorage::addString(std::string_view text) {
   uint64_t offset = strings.size();
   strings.append(text);
@@ -151,17 +167,7 @@ uint32_t PackageStorage::addMeshCluster(const ClusterGeometryInput& geometry, co
   r.radius = info.radius;
   setVec3(r.aabb_min, info.aabb_min);
   setVec3(r.aabb_max, info.aabb_max);
-  r.error = lod.error;
-  r.parent_error = lod.parent_error;
-  glm::vec4 sphere = lod.lod_sphere.w > 0.0f ? lod.lod_sphere : glm::vec4(info.center, info.radius);
-  glm::vec4 parent = lod.parent_lod_sphere.w > 0.0f ? lod.parent_lod_sphere : sphere;
-  setVec3(r.lod_center, glm::vec3(sphere));
-  r.lod_radius = sphere.w;
-  setVec3(r.parent_lod_center, glm::vec3(parent));
-  r.parent_lod_radius = parent.w;
-  r.group = lod.group;
-  r.parent_group = lod.parent_group;
-  r.level = lod.level;
+  setClusterLod(r, lod, info.center, info.radius);
   r.kind = static_cast<uint8_t>(ClusterKind::Mesh);
   r.triangle_count = info.triangle_count;
   r.vertex_count = info.vertex_count;
@@ -316,17 +322,7 @@ uint32_t PackageStorage::addParametricCluster(uint32_t first_instance, uint32_t 
   float radius = std::nextafter(glm::length(hi - lo) * 0.5f, std::numeric_limits<float>::max());
   setVec3(r.center, center);
   r.radius = radius;
-  r.error = lod.error;
-  r.parent_error = lod.parent_error;
-  glm::vec4 sphere = lod.lod_sphere.w > 0.0f ? lod.lod_sphere : glm::vec4(center, radius);
-  glm::vec4 parent = lod.parent_lod_sphere.w > 0.0f ? lod.parent_lod_sphere : sphere;
-  setVec3(r.lod_center, glm::vec3(sphere));
-  r.lod_radius = sphere.w;
-  setVec3(r.parent_lod_center, glm::vec3(parent));
-  r.parent_lod_radius = parent.w;
-  r.group = lod.group;
-  r.parent_group = lod.parent_group;
-  r.level = lod.level;
+  setClusterLod(r, lod, center, radius);
   r.kind = static_cast<uint8_t>(ClusterKind::Parametric);
   r.page = kNone;
   r.instance_first = first_instance;

@@ -34,6 +34,11 @@ struct ClusterLod {
   glm::vec4 parent_lod_sphere{0.0f};  // radius 0 = use lod_sphere
 };
 
+// Fills a cluster record's LOD fields from `lod`; a zero-radius lod sphere falls back to the
+// given sphere (normally the cluster's bounds) and a zero-radius parent sphere to the lod sphere.
+void setClusterLod(pkg::ClusterRecord& record, const ClusterLod& lod,
+                   const glm::vec3& fallback_center, float fallback_radius);
+
 struct PackageStorage {
   // Build constants copied into the header.
   glm::dvec3 origin{0.0};  // world metres; all floats are relative to it

@@ -197,21 +197,18 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
       r.radius = info.radius;
       setVec3(r.aabb_min, info.aabb_min);
       setVec3(r.aabb_max, info.aabb_max);
-      r.error = cl.error;
-      r.parent_error = cl.parent_error;
       // A zero radius (a cluster shrunk to a point cannot happen after welding, but be safe)
       // falls back to the decoded sphere, as addMeshCluster does.
-      const bool has_lod = cl.lod_radius > 0.0f;
-      const glm::vec3 lod_center = has_lod ? cl.lod_center : info.center;
-      const float lod_radius = has_lod ? cl.lod_radius : info.radius;
-      const bool has_parent = cl.parent_lod_radius > 0.0f;
-      setVec3(r.lod_center, lod_center);
-      r.lod_radius = lod_radius + lod_slack;
-      setVec3(r.parent_lod_center, has_parent ? cl.parent_lod_center : lod_center);
-      r.parent_lod_radius = (has_parent ? cl.parent_lod_radius : lod_radius) + lod_slack;
-      r.group = rebase(cl.group, placement.first_group);
-      r.parent_group = rebase(cl.parent_group, placement.first_group);
-      r.level = static_cast<uint16_t>(cl.level);
+      ClusterLod lod;
+      lod.error = cl.error;
+      lod.parent_error = cl.parent_error;
+      lod.group = rebase(cl.group, placement.first_group);
+      lod.parent_group = rebase(cl.parent_group, placement.first_group);
+      lod.level = static_cast<uint16_t>(cl.level);
+      if (cl.lod_radius > 0.0f) lod.lod_sphere = glm::vec4(cl.lod_center, cl.lod_radius + lod_slack);
+      if (cl.parent_lod_radius > 0.0f)
+        lod.parent_lod_sphere = glm::vec4(cl.parent_lod_center, cl.parent_lod_radius + lod_slack);
+      setClusterLod(r, lod, info.center, info.radius + lod_slack);
       r.kind = static_cast<uint8_t>(ClusterKind::Mesh);
       r.triangle_count = info.triangle_count;
       r.vertex_count = info.vertex_count;
