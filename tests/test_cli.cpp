@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include <nlohmann/json.hpp>
@@ -41,7 +43,8 @@ nlohmann::json infoJson(const std::filesystem::path& file) {
 
 TEST(Cli, HelpOnEveryVerb) {
   for (const char* verb :
-       {"", "info ", "gen ", "gen plant ", "snapshot ", "preprocess ", "verify "}) {
+       {"", "info ", "gen ", "gen plant ", "snapshot ", "preprocess ", "verify ", "render ",
+        "view ", "compare "}) {
     RunResult r = run(std::string(verb) + "--help");
     EXPECT_EQ(r.exit_code, 0) << verb << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << verb << r.output;
@@ -231,6 +234,92 @@ TEST(Cli, PreprocessVerifyAndInfoOnTheKicadConnector) {
               0.6 * j["levels"][level - 1]["triangles"].get<double>())
         << "level " << level;
   EXPECT_LE(j["bytes_per_input_triangle"].get<double>(), 24.0);
+}
+
+}  // namespace
+}  // namespace tw
+
+namespace tw {
+namespace {
+
+// A small package from the bunny, built through the command line once for the runtime verbs.
+std::filesystem::path bunnyPackageForCli() {
+  static const std::filesystem::path path = [] {
+    auto out = test::scratchDir() / "bunny-cli.twk";
+    RunResult r = run("preprocess --quiet " + (test::sharedDataDir() / "stanford-bunny.obj").string() +
+                      " -o " + out.string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return out;
+  }();
+  return path;
+}
+
+// `render` headless: a generated orbit, its path saved and replayed, stats as CSV and JSON, PNG
+// colour and id frames, and the same path replayed from the file gives the same frame count.
+TEST(Cli, RenderWritesFramesStatsAndReplaysItsPath) {
+  auto package = bunnyPackageForCli();
+  auto dir = test::scratchDir();
+  RunResult r = run("render --quiet " + package.string() + " --orbit 4 --size 96x64 --png --out " +
+                    (dir / "orbit").string() + " --save-path " + (dir / "orbit.path").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  for (const char* name : {"frame_00000.png", "ids_00003.png", "frames.csv", "frames.json",
+                           "summary.json"})
+    EXPECT_TRUE(std::filesystem::exists(dir / "orbit" / name)) << name;
+  auto summary = nlohmann::json::parse(test::readFile(dir / "orbit" / "summary.json"));
+  EXPECT_EQ(summary["frames"], 4);
+  EXPECT_GT(summary["median_triangles"].get<double>(), 0.0);
+  auto frames = nlohmann::json::parse(test::readFile(dir / "orbit" / "frames.json"));
+  ASSERT_EQ(frames["frames"].size(), 4u);
+  EXPECT_GT(frames["frames"][0]["triangles_drawn"].get<uint64_t>(), 0u);
+  std::string csv = test::readFile(dir / "orbit" / "frames.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);  // header + 4 frames
+
+  RunResult replay = run("render --quiet " + package.string() + " --path " +
+                         (dir / "orbit.path").string() + " --size 96x64 --out " +
+                         (dir / "replay").string());
+  ASSERT_EQ(replay.exit_code, 0) << replay.output;
+  auto replayed = nlohmann::json::parse(test::readFile(dir / "replay" / "summary.json"));
+  EXPECT_EQ(replayed["frames"], 4);
+
+  RunResult reference = run("render --quiet " + package.string() + " --orbit 2 --size 96x64 " +
+                            "--reference --out " + (dir / "reference").string());
+  ASSERT_EQ(reference.exit_code, 0) << reference.output;
+  auto ref = nlohmann::json::parse(test::readFile(dir / "reference" / "summary.json"));
+  EXPECT_EQ(ref["mode"], "reference");
+  EXPECT_EQ(ref["median_triangles"].get<double>(), 69451.0);  // every bunny triangle
+}
+
+TEST(Cli, RenderRejectsABadPathFileNamingTheLine) {
+  auto package = bunnyPackageForCli();
+  auto dir = test::scratchDir();
+  test::writeFile(dir / "bad.path", "# terawalk camera path 1\n0 1 2 3 0 0 60\n1 1 2 zz 0 0 60\n");
+  RunResult r = run("render --quiet " + package.string() + " --path " +
+                    (dir / "bad.path").string() + " --size 32x32");
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("bad.path"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("line 3"), std::string::npos) << r.output;
+  RunResult no_path = run("render --quiet " + package.string() + " --size 32x32");
+  EXPECT_EQ(no_path.exit_code, 1) << no_path.output;
+}
+
+// The window under a virtual X server (skipped where xvfb-run is missing).
+TEST(Cli, ViewRunsUnderXvfbAndSavesAScreenshot) {
+  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xvfb-run";
+  auto package = bunnyPackageForCli();
+  auto shot = test::scratchDir() / "view.png";
+  std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(TW_TERAWALK_EXE) +
+                        " view " + package.string() + " --size 320x240 --frames 3 --screenshot " +
+                        shot.string() + " 2>&1";
+  FILE* pipe = popen(command.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) output.append(buf, n);
+  int status = pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
+  EXPECT_TRUE(std::filesystem::exists(shot)) << output;
+  EXPECT_GT(std::filesystem::file_size(shot), 500u);
 }
 
 }  // namespace

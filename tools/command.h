@@ -25,5 +25,8 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global);
 void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global);
 void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global);
 void registerVerifyCommand(CLI::App& app, const GlobalOptions& global);
+void registerRenderCommand(CLI::App& app, const GlobalOptions& global);
+void registerViewCommand(CLI::App& app, const GlobalOptions& global);
+void registerCompareCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

@@ -16,6 +16,9 @@ int main(int argc, char** argv) {
   tw::registerPreprocessCommand(app, global);
   tw::registerSnapshotCommand(app, global);
   tw::registerVerifyCommand(app, global);
+  tw::registerRenderCommand(app, global);
+  tw::registerViewCommand(app, global);
+  tw::registerCompareCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

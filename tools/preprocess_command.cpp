@@ -5,32 +5,11 @@
 #include <string>
 
 #include "command.h"
+#include "command_args.h"
 #include "preprocess_driver.h"
 
 namespace tw {
 namespace {
-
-// "2G", "512M", "1.5GiB", "800000000" -> bytes (powers of 1024 for suffixes).
-uint64_t parseByteSize(const std::string& text) {
-  size_t used = 0;
-  double value = 0.0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  std::string suffix = text.substr(used);
-  for (char& c : suffix) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
-  double scale = 0.0;
-  if (suffix.empty() || suffix == "B") scale = 1.0;
-  else if (suffix == "K" || suffix == "KB" || suffix == "KIB") scale = 1024.0;
-  else if (suffix == "M" || suffix == "MB" || suffix == "MIB") scale = 1024.0 * 1024.0;
-  else if (suffix == "G" || suffix == "GB" || suffix == "GIB") scale = 1024.0 * 1024.0 * 1024.0;
-  if (used == 0 || scale == 0.0 || !(value > 0.0) || value * scale > 1e15)
-    throw std::runtime_error("--memory-budget: expected a size such as 2G or 512M, got '" + text +
-                             "'");
-  return static_cast<uint64_t>(value * scale);
-}
 
 struct PreprocessArgs {
   std::vector<std::string> inputs;
@@ -90,7 +69,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     PreprocessOptions options;
     for (const auto& input : args->inputs) options.inputs.emplace_back(input);
     options.output = args->output;
-    options.memory_budget_bytes = parseByteSize(args->memory_budget);
+    options.memory_budget_bytes = parseByteSize(args->memory_budget, "--memory-budget");
     options.threads = args->threads;
     options.cluster_size = args->cluster_size;
     options.max_brick_triangles = args->brick_triangles;

@@ -1,0 +1,208 @@
+// The frame loop: package + cut + pager + renderer, one frame at a time. See frame_loop.h.
+#include "frame_loop.h"
+
+#include <GL/gl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace tw {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+// Per object: its own colour, else its layer's, else a neutral grey.
+std::vector<uint32_t> objectColors(const PackageView& view) {
+  std::vector<uint32_t> colors;
+  colors.reserve(view.objects().size());
+  for (const pkg::ObjectRecord& object : view.objects()) {
+    uint32_t rgba = object.color_rgba;
+    if (rgba == 0 && object.layer < view.layers().size()) rgba = view.layers()[object.layer].color_rgba;
+    colors.push_back(rgba != 0 ? rgba : 0xffb0b0b0u);
+  }
+  return colors;
+}
+
+// Pool bytes the given clusters need (vertices, 16-bit indices, one object per triangle).
+uint64_t poolBytesFor(const PackageView& view, const std::vector<uint32_t>& clusters) {
+  uint64_t bytes = 0;
+  for (uint32_t c : clusters) {
+    const pkg::ClusterRecord& r = view.clusters()[c];
+    bytes += uint64_t(r.vertex_count) * 8 + uint64_t(r.triangle_count) * (3 * 2 + 4);
+  }
+  return bytes;
+}
+
+}  // namespace
+
+Walkthrough::Walkthrough(const std::filesystem::path& package, const WalkthroughOptions& options)
+    : options_(options), tau_px_(options.tau_px) {
+  view_ = std::make_unique<PackageView>(PackageView::open(package, PackageView::Verify::Headers));
+  cut_ = std::make_unique<LodCut>(*view_);
+  std::vector<uint32_t> pinned = cut_->rootPages();
+  PagerOptions pager_options = options_.pager;
+  if (options_.reference) {
+    // Brute force: every level-0 cluster resident for the whole run, in a pool big enough for
+    // all of them whatever the budget (the pool splits its bytes by a typical ratio, hence the
+    // margin).
+    reference_clusters_ = cut_->levelZeroClusters();
+    pinned.clear();
+    for (uint32_t c : reference_clusters_) pinned.push_back(view_->clusters()[c].page);
+    std::sort(pinned.begin(), pinned.end());
+    pinned.erase(std::unique(pinned.begin(), pinned.end()), pinned.end());
+    pager_options.gpu_budget_bytes =
+        std::max(pager_options.gpu_budget_bytes, 4 * poolBytesFor(*view_, reference_clusters_));
+    pager_options.evict_after_frames = UINT32_MAX;
+  }
+  std::unique_ptr<PageSource> source =
+      options_.page_source ? options_.page_source(*view_) : makePackagePageSource(*view_);
+  pager_ = std::make_unique<Pager>(*view_, std::move(source), pager_options);
+  pool_ = std::make_unique<GeometryPool>(pager_->poolLayout());
+  RendererOptions renderer_options;
+  renderer_options.width = options_.width;
+  renderer_options.height = options_.height;
+  renderer_ = std::make_unique<GlRenderer>(renderer_options);
+  renderer_->setObjectColors(objectColors(*view_));
+
+  // The only wait of the run: the pinned pages, so the first frame shows the whole model.
+  pager_->pin(pinned);
+  pager_->waitForPinned();
+  pager_->beginFrame(frame_);
+  auto all_resident = [&] {
+    return std::all_of(pinned.begin(), pinned.end(), [&](uint32_t p) { return pager_->resident(p); });
+  };
+  while (!all_resident()) {
+    std::vector<PageUpload> uploads = pager_->takeUploads();
+    if (uploads.empty()) {
+      if (all_resident()) break;
+      throw std::runtime_error(package.string() +
+                               ": the GPU budget is too small for the model's root pages");
+    }
+    for (const PageUpload& upload : uploads) pool_->upload(upload);
+  }
+}
+
+Walkthrough::~Walkthrough() = default;
+
+glm::dvec3 Walkthrough::worldMin() const {
+  const auto& h = view_->header();
+  return view_->origin() + glm::dvec3(h.bounds_min[0], h.bounds_min[1], h.bounds_min[2]);
+}
+
+glm::dvec3 Walkthrough::worldMax() const {
+  const auto& h = view_->header();
+  return view_->origin() + glm::dvec3(h.bounds_max[0], h.bounds_max[1], h.bounds_max[2]);
+}
+
+void Walkthrough::uploadReady(FrameStats& stats) {
+  for (const PageUpload& upload : pager_->takeUploads()) stats.bytes_uploaded += pool_->upload(upload);
+}
+
+void Walkthrough::adaptTau(double frame_ms) {
+  if (options_.target_fps <= 0.0) return;
+  const double target_ms = 1000.0 / options_.target_fps;
+  const double ratio = frame_ms / target_ms;
+  // Multiplicative steps with a dead band, so tau settles instead of oscillating.
+  if (ratio > 1.1)
+    tau_px_ *= std::min(1.5, std::sqrt(ratio));
+  else if (ratio < 0.8)
+    tau_px_ /= 1.1;
+  tau_px_ = std::clamp(tau_px_, options_.min_tau_px, options_.max_tau_px);
+}
+
+FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
+  const auto frame_start = Clock::now();
+  FrameStats stats;
+  stats.frame = frame_;
+  stats.time_s = time_s;
+  stats.tau_px = options_.reference ? 0.0 : tau_px_;
+  pager_->beginFrame(frame_ + 1);  // frame 0 of the pager was the start-up load
+  uploadReady(stats);
+
+  const double aspect = double(renderer_->width()) / double(renderer_->height());
+  const glm::dvec3 eye = camera.position - view_->origin();
+  const std::vector<uint32_t>* draw_list = &reference_clusters_;
+  const auto cut_start = Clock::now();
+  if (!options_.reference) {
+    CutView cut_view;
+    cut_view.eye = eye;
+    cut_view.frustum = makeFrustum(camera, eye, aspect);
+    cut_view.pixel_scale = camera.pixelScale(renderer_->height());
+    cut_view.near_m = camera.near_m;
+    CutOptions cut_options;
+    cut_options.tau_px = tau_px_;
+    cut_options.min_feature_px = options_.min_feature_px;
+    auto resident = [this](uint32_t page) { return pager_->resident(page); };
+    cut_->select(cut_view, cut_options, resident, cut_result_);
+    for (const PageWant& want : cut_result_.wanted) pager_->request(want.page, want.priority);
+
+    // Prefetch: the cut from where the camera will be, at a lower priority than what is
+    // missing now.
+    if (options_.prefetch && last_position_ && time_s > last_time_s_) {
+      const glm::dvec3 velocity = (camera.position - *last_position_) / (time_s - last_time_s_);
+      if (glm::length(velocity) > 1e-3) {
+        Camera ahead = camera;
+        ahead.position += velocity * options_.prefetch_ahead_s;
+        const glm::dvec3 ahead_eye = ahead.position - view_->origin();
+        cut_view.eye = ahead_eye;
+        cut_view.frustum = makeFrustum(ahead, ahead_eye, aspect);
+        cut_options.collect_draws = false;
+        cut_->select(cut_view, cut_options, resident, prefetch_result_);
+        for (const PageWant& want : prefetch_result_.wanted)
+          pager_->request(want.page, 0.5f * want.priority);
+      }
+    }
+    draw_list = &cut_result_.clusters;
+    stats.nodes_visited = cut_result_.stats.groups_visited + cut_result_.stats.clusters_tested;
+    stats.culled_frustum = cut_result_.stats.culled_frustum;
+    stats.culled_small = cut_result_.stats.culled_small;
+    stats.parametric_skipped = uint32_t(cut_result_.parametric_clusters.size());
+    stats.ancestor_fallbacks = cut_result_.stats.groups_blocked;
+  }
+  stats.cpu_cut_ms = msSince(cut_start);
+  last_position_ = camera.position;
+  last_time_s_ = time_s;
+
+  // Draw items in double: offset of each cluster's grid origin from the eye.
+  items_.clear();
+  items_.reserve(draw_list->size());
+  for (uint32_t c : *draw_list) {
+    const pkg::ClusterRecord& record = view_->clusters()[c];
+    pager_->touch(record.page);
+    DrawItem item;
+    item.placement = pager_->gpuCluster(c);
+    const glm::dvec3 grid_origin_m = glm::dvec3(item.placement.grid_origin) * item.placement.cell_m;
+    item.offset_eye = glm::vec3(grid_origin_m - eye);
+    items_.push_back(item);
+    stats.triangles_drawn += item.placement.triangle_count;
+  }
+  stats.nodes_drawn = uint32_t(items_.size());
+
+  renderer_->beginFrame(glm::mat4(camera.viewRotation()), glm::mat4(camera.projection(aspect)));
+  renderer_->draw(*pool_, items_);
+  const RenderStats render_stats = renderer_->endFrame();
+  if (options_.finish_each_frame) glFinish();
+  stats.gpu_ms = render_stats.gpu_ms;
+
+  const PagerStats pager_stats = pager_->stats();
+  stats.pages_resident = pager_stats.pages_resident;
+  stats.pages_requested = pager_stats.pages_requested;
+  stats.pages_loaded = pager_stats.pages_uploaded;
+  stats.pages_evicted = pager_stats.pages_evicted;
+  stats.gpu_bytes_used = pager_stats.gpu_bytes_used;
+  stats.host_bytes_used = pager_stats.host_bytes_used;
+  stats.rss_bytes = currentRssBytes();
+  stats.frame_ms = msSince(frame_start);
+  if (!options_.reference) adaptTau(stats.frame_ms);
+  ++frame_;
+  return stats;
+}
+
+}  // namespace tw

@@ -1,0 +1,86 @@
+// The walkthrough frame loop: one object that owns the mapped package, the LOD cut, the pager
+// and the renderer, and turns a camera into a frame. `terawalk render` (headless, EGL) and
+// `terawalk view` (GLFW window) both drive it, so they draw and report exactly the same way.
+//
+// Each frame (docs/runtime.md): start the pager's frame; upload what loaders finished, within the
+// per-frame cap; select the cut for the camera (frustum, screen-space error tau, small features,
+// resident ancestors standing in for missing pages) and request the missing pages by priority;
+// prefetch along the camera's velocity (a second, draw-less cut from where the camera will be);
+// draw the cut with one multi-draw; adapt tau to --target-fps. Nothing here waits for I/O except
+// the constructor, which loads the root pages once (a few, whatever the model size) so the first
+// frame is never empty.
+#pragma once
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+
+#include "camera.h"
+#include "frame_stats.h"
+#include "gl_renderer.h"
+#include "lod_cut.h"
+#include "package_view.h"
+#include "pager.h"
+
+namespace tw {
+
+struct WalkthroughOptions {
+  int width = 1280;
+  int height = 720;
+  double tau_px = 1.0;
+  double min_feature_px = 1.0;
+  PagerOptions pager;
+  bool reference = false;        // brute force: every level-0 cluster, no LOD, no culling
+  bool prefetch = true;          // along the camera's velocity
+  double prefetch_ahead_s = 0.5;
+  double target_fps = 0.0;       // > 0: adapt tau to hold this frame rate
+  double min_tau_px = 0.25, max_tau_px = 64.0;
+  bool finish_each_frame = true;  // glFinish so frame_ms includes the GPU (headless timing)
+  // Replaces the package as page source (tests: a deliberately slow reader).
+  std::function<std::unique_ptr<PageSource>(const PackageView&)> page_source;
+};
+
+class Walkthrough {
+ public:
+  // Opens the package (mmap, headers and tables only), builds the cut index, starts the pager and
+  // the renderer (a GL 4.5 context must be current), and loads the root pages (reference mode:
+  // every level-0 page). Throws FormatError for a bad package, std::runtime_error otherwise.
+  Walkthrough(const std::filesystem::path& package, const WalkthroughOptions& options);
+  ~Walkthrough();
+  Walkthrough(const Walkthrough&) = delete;
+  Walkthrough& operator=(const Walkthrough&) = delete;
+
+  // Renders one frame into the renderer's framebuffer. `time_s` is recorded in the stats and
+  // drives the velocity estimate for prefetching.
+  FrameStats renderFrame(const Camera& camera, double time_s);
+
+  const PackageView& package() const { return *view_; }
+  GlRenderer& renderer() { return *renderer_; }
+  Pager& pager() { return *pager_; }
+  double tau() const { return tau_px_; }
+  void setTau(double tau_px) { tau_px_ = tau_px; }
+  void setMinFeaturePx(double px) { options_.min_feature_px = px; }
+  // World bounds of the model (double), for cameras and paths.
+  glm::dvec3 worldMin() const;
+  glm::dvec3 worldMax() const;
+
+ private:
+  void uploadReady(FrameStats& stats);
+  void adaptTau(double frame_ms);
+
+  WalkthroughOptions options_;
+  std::unique_ptr<PackageView> view_;
+  std::unique_ptr<LodCut> cut_;
+  std::unique_ptr<Pager> pager_;
+  std::unique_ptr<GeometryPool> pool_;
+  std::unique_ptr<GlRenderer> renderer_;
+  std::vector<uint32_t> reference_clusters_;
+  CutResult cut_result_, prefetch_result_;
+  std::vector<DrawItem> items_;
+  double tau_px_ = 1.0;
+  uint64_t frame_ = 0;
+  std::optional<glm::dvec3> last_position_;
+  double last_time_s_ = 0.0;
+};
+
+}  // namespace tw

@@ -1,0 +1,66 @@
+// Per-frame statistics of the walkthrough, and their CSV / JSON forms (`terawalk render` writes
+// both for every frame; the viewer shows them live). One struct so the headless and windowed
+// paths report the same thing.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace tw {
+
+struct FrameStats {
+  uint64_t frame = 0;
+  double time_s = 0.0;         // path time of the frame
+  double frame_ms = 0.0;       // wall time of the whole frame (CPU + waiting for the GPU)
+  double cpu_cut_ms = 0.0;     // LOD traversal (select + prefetch)
+  double gpu_ms = 0.0;         // draw time from GL timer queries
+  double tau_px = 0.0;         // the tau in use (changes with --target-fps)
+  uint32_t nodes_visited = 0;  // groups visited + clusters tested
+  uint32_t nodes_drawn = 0;    // mesh clusters drawn
+  uint64_t triangles_drawn = 0;
+  uint32_t culled_frustum = 0;
+  uint32_t culled_small = 0;
+  uint32_t parametric_skipped = 0;  // visible parametric clusters not drawn (no shaders yet)
+  uint32_t pages_resident = 0;
+  uint32_t pages_requested = 0;     // in the queue at the end of the frame
+  uint32_t pages_loaded = 0;        // uploaded this frame
+  uint32_t pages_evicted = 0;
+  uint64_t bytes_uploaded = 0;
+  uint32_t ancestor_fallbacks = 0;  // groups drawn coarser because pages were missing
+  uint64_t gpu_bytes_used = 0;
+  uint64_t host_bytes_used = 0;
+  uint64_t rss_bytes = 0;
+};
+
+// Resident set size of this process now, from /proc/self/statm (0 if unavailable).
+uint64_t currentRssBytes();
+
+std::string frameStatsCsvHeader();
+std::string frameStatsCsvRow(const FrameStats& stats);
+// Writes `frames` as CSV (header + one row per frame) and as JSON ({"frames": [...]}).
+// Throws std::runtime_error naming the file on I/O failure.
+void writeFrameStatsCsv(const std::vector<FrameStats>& frames, const std::filesystem::path& file);
+void writeFrameStatsJson(const std::vector<FrameStats>& frames, const std::filesystem::path& file);
+
+// Median of a field over frames (e.g. [](auto& f) { return f.frame_ms; }); 0 for no frames.
+template <typename Field>
+double medianOf(const std::vector<FrameStats>& frames, Field field);
+
+}  // namespace tw
+
+#include <algorithm>
+
+namespace tw {
+template <typename Field>
+double medianOf(const std::vector<FrameStats>& frames, Field field) {
+  if (frames.empty()) return 0.0;
+  std::vector<double> values;
+  values.reserve(frames.size());
+  for (const FrameStats& f : frames) values.push_back(static_cast<double>(field(f)));
+  std::sort(values.begin(), values.end());
+  const size_t n = values.size();
+  return n % 2 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+}  // namespace tw

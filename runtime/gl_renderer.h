@@ -1,0 +1,96 @@
+// The GL 4.5 core renderer shared by the headless (EGL) and windowed (GLFW) paths.
+//
+// Renders into its own framebuffer: RGBA8 colour, R32UI object ids (object index + 1, 0 = no
+// geometry), 32-bit float depth, reversed Z (camera.h). Mesh clusters come from the GeometryPool
+// and are drawn with one glMultiDrawElementsIndirect: per-draw data (eye-relative offset of the
+// cluster's grid origin, cell size, first triangle in the object pool) sits in an SSBO indexed by
+// gl_DrawIDARB; the fragment shader finds the triangle's object through gl_PrimitiveID, colours it
+// with the colour setObjectColors gave that object (grey when 0 or absent), and lights it with a directional plus hemispheric
+// term using a face normal from screen-space derivatives (the package stores no normals).
+// GPU time is measured with one GL_TIME_ELAPSED query per frame, from beginFrame to endFrame (so
+// no other GL_TIME_ELAPSED query may be active in between), read back without waiting by
+// endFrame or with waiting by waitForGpuMs. No backface culling unless asked (open CAD shells).
+// draw() and beginFrame() set the GL state they need each time (framebuffer, viewport, clip
+// control, depth test, culling) and leave reversed-Z clip control set. Needs a current GL 4.5
+// context for the renderer's whole life.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "geometry_pool.h"
+
+namespace tw {
+
+// One cluster to draw, prepared by the frame loop in double precision.
+struct DrawItem {
+  GpuCluster placement;
+  glm::vec3 offset_eye{0.0f};  // (grid_origin * cell_m) + origin - eye, world metres, in double then rounded
+};
+
+struct RendererOptions {
+  int width = 1280;
+  int height = 720;
+  glm::vec3 background{0.72f, 0.80f, 0.90f};
+  // Off by default: CAD parts are often open shells, and their inside must stay visible.
+  bool cull_backfaces = false;  // counter-clockwise front faces
+};
+
+struct RenderStats {
+  uint32_t draws = 0;
+  uint64_t triangles = 0;
+  double gpu_ms = 0.0;  // of the last finished frame's draw (timer query); 0 before the first
+};
+
+class GlRenderer {
+ public:
+  // Throws std::runtime_error when GL set-up fails, std::invalid_argument for a size <= 0.
+  explicit GlRenderer(const RendererOptions& options);
+  ~GlRenderer();
+  GlRenderer(const GlRenderer&) = delete;
+  GlRenderer& operator=(const GlRenderer&) = delete;
+
+  int width() const;
+  int height() const;
+  void resize(int width, int height);  // recreates the targets; same exceptions as the constructor
+
+  // Colour per object index (0xAABBGGRR), resolved from the object and layer tables; objects
+  // beyond the table draw grey.
+  void setObjectColors(std::span<const uint32_t> rgba);
+
+  // Clears colour, ids and depth, and sets the camera (rotation and projection; positions come
+  // eye-relative through DrawItem::offset_eye).
+  void beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection);
+  // One multi-draw over the pool; may be called several times per frame. Items with no triangles
+  // are skipped. Throws std::out_of_range, drawing nothing, when an item's ranges lie outside the
+  // pool's layout.
+  void draw(const GeometryPool& pool, std::span<const DrawItem> items);
+  // Ends the frame (timer query) and waits for nothing: gpu_ms is that of the newest frame whose
+  // query has finished (usually one or two frames old), 0 before any has.
+  RenderStats endFrame();
+  // Blocks until the last ended frame's timer query is available and returns its GPU ms (for
+  // headless runs that read every frame back anyway); 0 when no frame was ended yet.
+  double waitForGpuMs();
+  void setCullBackfaces(bool cull);
+
+  // Reads back the last frame (blocks on the GPU). Rows bottom-up as GL gives them when
+  // flip_y is false; top-down (image order) when true.
+  void readColor(std::vector<uint8_t>& rgba, bool flip_y = true) const;
+  void readObjectIds(std::vector<uint32_t>& ids, bool flip_y = true) const;
+  // Copies the colour to the default framebuffer (windowed mode) at its size.
+  void blitToScreen(int screen_width, int screen_height) const;
+
+  // GL names, for passes that render into or read the same targets (e.g. occlusion, overlays).
+  unsigned framebuffer() const;
+  unsigned depthTexture() const;  // GL_DEPTH_COMPONENT32F, reversed Z (1 near, 0 far/empty)
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tw

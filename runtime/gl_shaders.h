@@ -1,0 +1,121 @@
+// GLSL of the mesh pass, embedded as C++ raw strings, and the one GPU-visible struct it shares
+// with the C++ side.
+//
+// Why here and not in .glsl files: a header needs no build step, and the per-draw struct is
+// written once (kDrawDataFields) and expanded both as a C++ struct and as GLSL text, so the two
+// can never disagree. Binding points and uniform locations are constants used by both sides.
+// Included only by gl_renderer.cpp (and tests that want the layout).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include <glm/glm.hpp>
+
+namespace tw::gl {
+
+// Shader storage binding points.
+inline constexpr unsigned kDrawDataBinding = 0;        // GpuDrawData[], indexed by gl_DrawIDARB
+inline constexpr unsigned kTriangleObjectBinding = 1;  // uint object per pool triangle
+inline constexpr unsigned kObjectColorBinding = 2;     // uint 0xAABBGGRR per object index
+// Uniform locations.
+inline constexpr int kViewProjectionLocation = 0;  // mat4: projection * view rotation
+inline constexpr int kObjectColorCountLocation = 1;  // uint: entries in the colour buffer
+
+// The per-draw record. std430: vec3 aligns to 16 and is followed by a float in the same 16 bytes;
+// the array stride is 32, which the padding makes equal to sizeof on the C++ side.
+#define TW_GPU_DRAW_DATA_FIELDS \
+  vec3 offset_eye;              \
+  float cell_m;                 \
+  uint first_triangle;          \
+  uint reserved0;               \
+  uint reserved1;               \
+  uint reserved2;
+#define TW_GL_STRINGIFY_(...) #__VA_ARGS__
+#define TW_GL_STRINGIFY(...) TW_GL_STRINGIFY_(__VA_ARGS__)
+
+namespace glsl_types {
+using vec3 = glm::vec3;
+using uint = uint32_t;
+struct GpuDrawData {
+  TW_GPU_DRAW_DATA_FIELDS
+};
+}  // namespace glsl_types
+using GpuDrawData = glsl_types::GpuDrawData;
+static_assert(sizeof(GpuDrawData) == 32 && offsetof(GpuDrawData, cell_m) == 12 &&
+                  offsetof(GpuDrawData, first_triangle) == 16,
+              "GpuDrawData must match the std430 layout of the GLSL struct");
+
+// GL's indirect command for glMultiDrawElementsIndirect (fixed by the GL spec).
+struct DrawElementsIndirectCommand {
+  uint32_t count;
+  uint32_t instance_count;
+  uint32_t first_index;
+  int32_t base_vertex;
+  uint32_t base_instance;
+};
+static_assert(sizeof(DrawElementsIndirectCommand) == 20);
+
+inline std::string meshVertexShader() {
+  return std::string(R"(#version 450 core
+#extension GL_ARB_shader_draw_parameters : require
+// Positions arrive as 16-bit grid units; the cluster's eye-relative origin and cell size come
+// from the per-draw record, so everything here stays small and float-safe far from the origin.
+layout(location = 0) in uvec3 q;
+struct GpuDrawData {
+)") + TW_GL_STRINGIFY(TW_GPU_DRAW_DATA_FIELDS) +
+         R"(
+};
+layout(std430, binding = 0) readonly buffer DrawDataBuffer { GpuDrawData draws[]; };
+layout(location = 0) uniform mat4 view_projection;
+out vec3 pos_eye;
+flat out uint first_triangle;
+void main() {
+  GpuDrawData d = draws[gl_DrawIDARB];
+  pos_eye = d.offset_eye + vec3(q) * d.cell_m;
+  first_triangle = d.first_triangle;
+  gl_Position = view_projection * vec4(pos_eye, 1.0);
+}
+)";
+}
+
+inline std::string meshFragmentShader() {
+  return R"(#version 450 core
+// Object from the per-triangle pool (gl_PrimitiveID restarts at 0 for every draw of a
+// multi-draw), colour from the object table, a face normal from screen-space derivatives (the
+// package stores none), and sky/ground hemispheric plus sun and head light. Two-sided: the normal
+// is turned toward the eye, because CAD surfaces are often open.
+in vec3 pos_eye;
+flat in uint first_triangle;
+layout(std430, binding = 1) readonly buffer TriangleObjects { uint tri_objects[]; };
+layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
+layout(location = 1) uniform uint object_color_count;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+
+const vec3 kSunDir = normalize(vec3(0.35, 0.25, 0.90));  // world (eye-relative axes are world axes)
+const vec3 kSky = vec3(0.80, 0.86, 0.95);
+const vec3 kGround = vec3(0.30, 0.27, 0.24);
+const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
+
+void main() {
+  uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
+  uint rgba = object < object_color_count ? object_colors[object] : 0u;
+  vec4 base = rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
+  vec3 to_eye = -pos_eye;
+  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
+  float len = length(n);
+  n = len > 1e-30 ? n / len : normalize(to_eye);
+  if (dot(n, to_eye) < 0.0) n = -n;
+  vec3 v = normalize(to_eye);
+  vec3 light = mix(kGround, kSky, 0.5 + 0.5 * n.z) * 0.55
+             + vec3(0.50) * max(dot(n, kSunDir), 0.0)
+             + vec3(0.22) * max(dot(n, v), 0.0);
+  out_color = vec4(min(base.rgb * light, vec3(1.0)), 1.0);
+  out_id = object + 1u;
+}
+)";
+}
+
+}  // namespace tw::gl

@@ -1,0 +1,216 @@
+// The walkthrough frame loop on llvmpipe: first frames show the model, the reference draws every
+// full-resolution triangle, a model at plant coordinates renders like one at the origin, a slow
+// page reader never stalls a frame (ancestors stand in, then the cut converges), and the adaptive
+// tau moves the right way.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <thread>
+
+#include "camera_path.h"
+#include "egl_context.h"
+#include "frame_loop.h"
+#include "preprocess_driver.h"
+#include "test_support.h"
+#include "tws_writer.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path bunnyPackage() {
+  static const fs::path path = [] {
+    fs::path out = test::scratchDir() / "bunny.twk";
+    PreprocessOptions options;
+    options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
+    options.output = out;
+    runPreprocess(options);
+    return out;
+  }();
+  return path;
+}
+
+// A row of closed boxes, each its own object, placed at `origin` (world metres).
+fs::path boxesPackage(const fs::path& dir, const std::string& name, const glm::dvec3& origin) {
+  const fs::path scene = dir / (name + ".tws");
+  {
+    TwsWriter writer(scene);
+    writer.onLayer(0, {"boxes", 0xff3366ccu});
+    for (uint32_t i = 0; i < 8; ++i) {
+      SceneObject object;
+      object.info.id = i;
+      object.info.name = "box " + std::to_string(i);
+      object.info.transform.origin = origin + glm::dvec3(i * 3.0, 0.0, 0.0);
+      TriangleMesh mesh;
+      for (int corner = 0; corner < 8; ++corner)
+        mesh.positions.push_back(glm::vec3(corner & 1 ? 1.0f : -1.0f, corner & 2 ? 1.0f : -1.0f,
+                                           corner & 4 ? 1.0f : -1.0f));
+      mesh.indices = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                      2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+      object.geometry = std::move(mesh);
+      writer.onObject(object);
+    }
+    writer.finish();
+  }
+  const fs::path out = dir / (name + ".twk");
+  PreprocessOptions options;
+  options.inputs = {scene};
+  options.output = out;
+  runPreprocess(options);
+  return out;
+}
+
+Camera lookingAt(const glm::dvec3& eye, const glm::dvec3& target) {
+  Camera camera;
+  camera.position = eye;
+  camera.lookAt(target);
+  camera.near_m = 0.05;
+  camera.far_m = 1000.0;
+  return camera;
+}
+
+double coveredShare(GlRenderer& renderer, uint32_t object_limit) {
+  std::vector<uint32_t> ids;
+  renderer.readObjectIds(ids);
+  size_t covered = 0;
+  for (uint32_t id : ids) {
+    EXPECT_LE(id, object_limit);
+    covered += id != 0;
+  }
+  return double(covered) / double(ids.size());
+}
+
+class FrameLoop : public ::testing::Test {
+ protected:
+  EglContext context_;
+};
+
+TEST_F(FrameLoop, FirstFrameShowsTheWholeBunny) {
+  WalkthroughOptions options;
+  options.width = 160;
+  options.height = 120;
+  Walkthrough walk(bunnyPackage(), options);
+  const glm::dvec3 center = 0.5 * (walk.worldMin() + walk.worldMax());
+  const double size = glm::length(walk.worldMax() - walk.worldMin());
+  const FrameStats stats =
+      walk.renderFrame(lookingAt(center + glm::dvec3(0, -1.5 * size, 0.3 * size), center), 0.0);
+  EXPECT_GT(stats.triangles_drawn, 0u);
+  EXPECT_LT(stats.triangles_drawn, walk.package().header().total_triangles);
+  EXPECT_GT(coveredShare(walk.renderer(), uint32_t(walk.package().objects().size())), 0.05);
+}
+
+TEST_F(FrameLoop, ReferenceDrawsEveryFullResolutionTriangle) {
+  WalkthroughOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.reference = true;
+  Walkthrough walk(bunnyPackage(), options);
+  const glm::dvec3 center = 0.5 * (walk.worldMin() + walk.worldMax());
+  const double size = glm::length(walk.worldMax() - walk.worldMin());
+  const FrameStats stats =
+      walk.renderFrame(lookingAt(center + glm::dvec3(0, -1.5 * size, 0.0), center), 0.0);
+  EXPECT_EQ(stats.triangles_drawn, walk.package().header().total_triangles);
+}
+
+TEST_F(FrameLoop, PlantCoordinatesRenderLikeTheOrigin) {
+  const glm::dvec3 far_origin(500000.0, 7000000.0, 0.0);
+  const fs::path dir = test::scratchDir();
+  const fs::path near_package = boxesPackage(dir, "near", glm::dvec3(0.0));
+  const fs::path far_package = boxesPackage(dir, "far", far_origin);
+  WalkthroughOptions options;
+  options.width = 160;
+  options.height = 120;
+  std::vector<uint32_t> near_ids, far_ids;
+  // A camera close to the boxes (a metre or so), moving by a millimetre per frame: at these
+  // coordinates a float eye would move in 0.5 m steps and the image would jump.
+  for (int step = 0; step < 3; ++step) {
+    const glm::dvec3 eye(4.0 + 0.001 * step, -3.0, 0.5);
+    const glm::dvec3 target(6.0, 0.0, 0.0);
+    {
+      Walkthrough walk(near_package, options);
+      walk.renderFrame(lookingAt(eye, target), 0.0);
+      walk.renderer().readObjectIds(near_ids);
+    }
+    {
+      Walkthrough walk(far_package, options);
+      walk.renderFrame(lookingAt(far_origin + eye, far_origin + target), 0.0);
+      walk.renderer().readObjectIds(far_ids);
+    }
+    ASSERT_EQ(near_ids.size(), far_ids.size());
+    size_t differ = 0, covered = 0;
+    for (size_t i = 0; i < near_ids.size(); ++i) {
+      differ += near_ids[i] != far_ids[i];
+      covered += near_ids[i] != 0;
+    }
+    EXPECT_GT(covered, near_ids.size() / 10) << "step " << step;
+    EXPECT_LE(differ, near_ids.size() / 1000) << "step " << step;
+  }
+}
+
+// Reads pages through the package, slowly, counting reads.
+class SlowSource : public PageSource {
+ public:
+  SlowSource(const PackageView& view, std::chrono::milliseconds delay)
+      : inner_(makePackagePageSource(view)), delay_(delay) {}
+  void read(uint32_t page, std::vector<uint8_t>& raw) override {
+    std::this_thread::sleep_for(delay_);
+    inner_->read(page, raw);
+  }
+
+ private:
+  std::unique_ptr<PageSource> inner_;
+  std::chrono::milliseconds delay_;
+};
+
+TEST_F(FrameLoop, SlowPagesNeverStallAFrameAndTheCutConverges) {
+  WalkthroughOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.tau_px = 0.5;
+  options.pager.loader_threads = 1;
+  options.page_source = [](const PackageView& view) {
+    return std::make_unique<SlowSource>(view, std::chrono::milliseconds(150));
+  };
+  Walkthrough walk(bunnyPackage(), options);
+  const glm::dvec3 center = 0.5 * (walk.worldMin() + walk.worldMax());
+  const double size = glm::length(walk.worldMax() - walk.worldMin());
+  // Teleport close: the cut wants pages that take 150 ms each to read.
+  const Camera close = lookingAt(center + glm::dvec3(0, -0.6 * size, 0.1 * size), center);
+  FrameStats first = walk.renderFrame(close, 0.0);
+  EXPECT_GT(first.ancestor_fallbacks, 0u);
+  EXPECT_GT(first.triangles_drawn, 0u);  // the resident ancestors, never a hole
+  EXPECT_LT(first.frame_ms, 150.0) << "the frame waited for a page read";
+  FrameStats last = first;
+  int frames = 1;
+  const auto start = std::chrono::steady_clock::now();
+  while (last.ancestor_fallbacks > 0 &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    last = walk.renderFrame(close, 0.0);
+    EXPECT_LT(last.frame_ms, 150.0) << "frame " << frames << " waited for a page read";
+    ++frames;
+  }
+  EXPECT_EQ(last.ancestor_fallbacks, 0u) << "the cut did not converge in " << frames << " frames";
+  EXPECT_GT(last.triangles_drawn, first.triangles_drawn);
+}
+
+TEST_F(FrameLoop, TargetFpsMovesTau) {
+  WalkthroughOptions options;
+  options.width = 160;
+  options.height = 120;
+  options.target_fps = 1e6;  // unreachable: tau must rise
+  Walkthrough fast(bunnyPackage(), options);
+  const glm::dvec3 center = 0.5 * (fast.worldMin() + fast.worldMax());
+  const double size = glm::length(fast.worldMax() - fast.worldMin());
+  const Camera camera = lookingAt(center + glm::dvec3(0, -1.5 * size, 0.0), center);
+  for (int i = 0; i < 5; ++i) fast.renderFrame(camera, i / 30.0);
+  EXPECT_GT(fast.tau(), options.tau_px);
+  options.target_fps = 0.001;  // trivially met: tau must fall to its floor
+  Walkthrough slow(bunnyPackage(), options);
+  for (int i = 0; i < 40; ++i) slow.renderFrame(camera, i / 30.0);
+  EXPECT_DOUBLE_EQ(slow.tau(), options.min_tau_px);
+}
+
+}  // namespace
+}  // namespace tw

@@ -1,0 +1,216 @@
+// `terawalk render model.twk`: the headless walkthrough. Renders a camera path (from a file, or a
+// generated orbit or fly-through) through EGL surfaceless (Mesa llvmpipe without a GPU), writes
+// per-frame statistics as CSV and JSON, PNG frames and object-id frames when asked, and prints a
+// summary. `--reference` draws every full-resolution triangle with no LOD and no culling: the
+// brute-force baseline that `terawalk compare` measures fidelity against.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+#include <stb_image_write.h>
+
+#include "camera_path.h"
+#include "command.h"
+#include "command_args.h"
+#include "egl_context.h"
+#include "frame_loop.h"
+
+namespace tw {
+namespace {
+
+struct RenderArgs {
+  std::string file;
+  std::string path_file;
+  int orbit_frames = 0;
+  int flythrough_frames = 0;
+  std::string save_path;
+  std::string size = "1280x720";
+  std::string out_dir;
+  bool png = false;
+  double fps = 30.0;
+  int max_frames = 0;
+  double tau_px = 1.0;
+  double min_feature_px = 1.0;
+  double target_fps = 0.0;
+  std::string gpu_budget = "1G";
+  std::string host_budget = "256M";
+  double upload_mb = 32.0;
+  uint32_t loader_threads = 2;
+  uint32_t evict_after = 30;
+  bool reference = false;
+  bool no_prefetch = false;
+};
+
+void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
+                    std::vector<uint8_t>& rgba, std::vector<uint32_t>& ids) {
+  char name[64];
+  renderer.readColor(rgba, true);
+  std::snprintf(name, sizeof name, "frame_%05llu.png", static_cast<unsigned long long>(index));
+  const int w = renderer.width(), h = renderer.height();
+  if (!stbi_write_png((dir / name).string().c_str(), w, h, 4, rgba.data(), w * 4))
+    throw std::runtime_error((dir / name).string() + ": cannot write PNG");
+  // Object ids, lossless: each pixel's uint32 (object index + 1) as its RGBA bytes.
+  renderer.readObjectIds(ids, true);
+  std::snprintf(name, sizeof name, "ids_%05llu.png", static_cast<unsigned long long>(index));
+  if (!stbi_write_png((dir / name).string().c_str(), w, h, 4, ids.data(), w * 4))
+    throw std::runtime_error((dir / name).string() + ": cannot write PNG");
+}
+
+void runRender(const RenderArgs& args, const GlobalOptions& global) {
+  using Clock = std::chrono::steady_clock;
+  int width = 0, height = 0;
+  parseImageSize(args.size, "--size", width, height);
+  if (!(args.fps > 0.0)) throw std::runtime_error("--fps must be positive");
+  const int path_sources =
+      int(!args.path_file.empty()) + int(args.orbit_frames > 0) + int(args.flythrough_frames > 0);
+  if (path_sources != 1)
+    throw std::runtime_error("give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES");
+  if (args.png && args.out_dir.empty()) throw std::runtime_error("--png needs --out DIR");
+  const std::filesystem::path out_dir = args.out_dir;
+  if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
+
+  const auto start = Clock::now();
+  EglContext context;
+  const double context_ms =
+      std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+
+  WalkthroughOptions options;
+  options.width = width;
+  options.height = height;
+  options.tau_px = args.tau_px;
+  options.min_feature_px = args.min_feature_px;
+  options.target_fps = args.target_fps;
+  options.reference = args.reference;
+  options.prefetch = !args.no_prefetch;
+  options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
+  options.pager.host_budget_bytes = parseByteSize(args.host_budget, "--host-budget");
+  options.pager.upload_bytes_per_frame = static_cast<uint64_t>(args.upload_mb * 1024 * 1024);
+  options.pager.loader_threads = args.loader_threads;
+  options.pager.evict_after_frames = args.evict_after;
+  const auto open_start = Clock::now();
+  Walkthrough walk(args.file, options);
+  const double open_ms =
+      std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
+
+  Aabb bounds;
+  bounds.add(walk.worldMin());
+  bounds.add(walk.worldMax());
+  CameraPath path;
+  if (!args.path_file.empty()) path = readCameraPath(args.path_file);
+  else if (args.orbit_frames > 0) path = generateOrbitPath(bounds, args.orbit_frames, args.fps);
+  else path = generateFlythroughPath(bounds, args.flythrough_frames, args.fps);
+  if (path.keys.empty()) throw std::runtime_error("the camera path has no key frames");
+  if (!args.save_path.empty()) writeCameraPath(path, args.save_path);
+
+  Camera base;
+  const double diagonal = glm::length(bounds.max - bounds.min);
+  base.near_m = 0.05;
+  base.far_m = std::max(100.0, 10.0 * diagonal);
+  int frames = static_cast<int>(std::floor(path.durationS() * args.fps + 1e-9)) + 1;
+  if (args.max_frames > 0) frames = std::min(frames, args.max_frames);
+
+  std::vector<FrameStats> all;
+  all.reserve(frames);
+  std::vector<uint8_t> rgba;
+  std::vector<uint32_t> ids;
+  double first_frame_ms = 0.0;
+  const double t0 = path.keys.front().time_s;
+  for (int i = 0; i < frames; ++i) {
+    const double t = t0 + i / args.fps;
+    FrameStats stats = walk.renderFrame(path.sample(t, base), t);
+    if (i == 0)
+      first_frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
+    if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
+    all.push_back(stats);
+    if (!global.quiet && (i % 30 == 0 || i + 1 == frames))
+      std::fprintf(stderr, "render: frame %d/%d  %.1f ms  %llu triangles\n", i + 1, frames,
+                   stats.frame_ms, static_cast<unsigned long long>(stats.triangles_drawn));
+  }
+
+  uint64_t peak_rss = 0, fallback_frames = 0;
+  for (const FrameStats& f : all) {
+    peak_rss = std::max(peak_rss, f.rss_bytes);
+    fallback_frames += f.ancestor_fallbacks > 0;
+  }
+  nlohmann::json summary = {
+      {"package", args.file},
+      {"mode", args.reference ? "reference" : "lod"},
+      {"width", width},
+      {"height", height},
+      {"frames", frames},
+      {"tau_px", args.tau_px},
+      {"context_ms", context_ms},
+      {"open_ms", open_ms},
+      {"first_frame_ms", first_frame_ms},
+      {"median_frame_ms", medianOf(all, [](const FrameStats& f) { return f.frame_ms; })},
+      {"median_gpu_ms", medianOf(all, [](const FrameStats& f) { return f.gpu_ms; })},
+      {"median_cpu_cut_ms", medianOf(all, [](const FrameStats& f) { return f.cpu_cut_ms; })},
+      {"median_triangles", medianOf(all, [](const FrameStats& f) { return f.triangles_drawn; })},
+      {"max_triangles",
+       all.empty() ? 0 : std::max_element(all.begin(), all.end(), [](auto& a, auto& b) {
+                           return a.triangles_drawn < b.triangles_drawn;
+                         })->triangles_drawn},
+      {"frames_with_ancestor_fallback", fallback_frames},
+      {"peak_rss_bytes", peak_rss},
+      {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
+      {"host_budget_bytes", options.pager.host_budget_bytes},
+      {"renderer", context.renderer()},
+  };
+  if (!out_dir.empty()) {
+    writeFrameStatsCsv(all, out_dir / "frames.csv");
+    writeFrameStatsJson(all, out_dir / "frames.json");
+    std::FILE* f = std::fopen((out_dir / "summary.json").string().c_str(), "w");
+    if (!f) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
+    const std::string text = summary.dump(1) + "\n";
+    std::fwrite(text.data(), 1, text.size(), f);
+    std::fclose(f);
+  }
+  std::printf("%s\n", summary.dump(1).c_str());
+}
+
+}  // namespace
+
+void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
+  auto args = std::make_shared<RenderArgs>();
+  CLI::App* cmd = app.add_subcommand(
+      "render", "Render a camera path headless (EGL, no X, no GPU needed); write stats and frames");
+  cmd->add_option("file", args->file, "Package (.twk)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--path", args->path_file, "Camera path file (docs/runtime.md)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--orbit", args->orbit_frames, "Generate an orbit around the model, N frames");
+  cmd->add_option("--flythrough", args->flythrough_frames, "Generate a fly-through, N frames");
+  cmd->add_option("--save-path", args->save_path, "Write the (generated) camera path here");
+  cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--out", args->out_dir, "Directory for frames.csv, frames.json, summary.json");
+  cmd->add_flag("--png", args->png, "Also write frame_NNNNN.png and ids_NNNNN.png");
+  cmd->add_option("--fps", args->fps, "Path sampling rate, frames per path second")
+      ->capture_default_str();
+  cmd->add_option("--max-frames", args->max_frames, "Stop after this many frames");
+  cmd->add_option("--tau", args->tau_px, "Screen-space error threshold, pixels")
+      ->capture_default_str();
+  cmd->add_option("--min-feature-px", args->min_feature_px,
+                  "Cull clusters smaller than this on screen, pixels")
+      ->capture_default_str();
+  cmd->add_option("--target-fps", args->target_fps, "Adapt tau to hold this frame rate");
+  cmd->add_option("--gpu-budget", args->gpu_budget, "GPU geometry pool size")->capture_default_str();
+  cmd->add_option("--host-budget", args->host_budget, "Host staging for decoded pages")
+      ->capture_default_str();
+  cmd->add_option("--upload-mb", args->upload_mb, "GPU upload cap per frame, MiB")
+      ->capture_default_str();
+  cmd->add_option("--loader-threads", args->loader_threads, "Page loader threads")
+      ->capture_default_str();
+  cmd->add_option("--evict-after", args->evict_after,
+                  "Frames a page must go unused before it may be evicted")
+      ->capture_default_str();
+  cmd->add_flag("--reference", args->reference,
+                "Brute force: every full-resolution triangle, no LOD, no culling");
+  cmd->add_flag("--no-prefetch", args->no_prefetch, "Do not prefetch along the camera's velocity");
+  cmd->callback([args, &global] { runRender(*args, global); });
+}
+
+}  // namespace tw

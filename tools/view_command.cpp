@@ -1,0 +1,288 @@
+// `terawalk view model.twk`: the interactive walkthrough in a GLFW window (works under xvfb-run).
+//
+// Game-like navigation (WASD + mouse look with the left button, Shift to run, Q/E down/up, the
+// wheel scales the speed, which starts from the model's size), an orbit mode (O) around the
+// model's centre, a screenshot key (F12), a camera-path recorder (R starts and stops; the path is
+// written in the documented text format) and replay (--path). An ImGui overlay shows the frame
+// statistics and sets tau, field of view, near/far and the small-feature threshold at run time.
+// The same Walkthrough as `terawalk render` draws every frame.
+#include <GL/gl.h>
+#include <GLFW/glfw3.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_opengl3.h>
+#include <stb_image_write.h>
+
+#include "camera_path.h"
+#include "command.h"
+#include "command_args.h"
+#include "frame_loop.h"
+
+namespace tw {
+namespace {
+
+struct ViewArgs {
+  std::string file;
+  std::string size = "1280x720";
+  std::string path_file;
+  std::string record_file = "recorded.path";
+  std::string gpu_budget = "1G";
+  double tau_px = 1.0;
+  double target_fps = 0.0;
+  int frames = 0;  // > 0: quit after this many frames (scripted runs, tests)
+  std::string screenshot;  // with --frames: write the last frame here
+};
+
+struct GlfwSession {
+  GlfwSession() {
+    if (!glfwInit()) throw std::runtime_error("GLFW: cannot initialise (no display? try xvfb-run -a)");
+  }
+  ~GlfwSession() { glfwTerminate(); }
+};
+
+void saveScreenshot(GlRenderer& renderer, const std::string& file) {
+  std::vector<uint8_t> rgba;
+  renderer.readColor(rgba, true);
+  if (!stbi_write_png(file.c_str(), renderer.width(), renderer.height(), 4, rgba.data(),
+                      renderer.width() * 4))
+    throw std::runtime_error(file + ": cannot write PNG");
+  std::fprintf(stderr, "view: wrote %s\n", file.c_str());
+}
+
+// Camera motion from the keyboard and mouse, walk and orbit modes.
+struct Navigator {
+  double speed_mps = 10.0;
+  bool orbit = false;
+  glm::dvec3 orbit_target{0.0};
+  double orbit_distance = 100.0;
+  bool dragging = false;
+  double last_x = 0.0, last_y = 0.0;
+
+  void update(GLFWwindow* window, Camera& camera, double dt) {
+    const bool ui_mouse = ImGui::GetIO().WantCaptureMouse;
+    const bool ui_keys = ImGui::GetIO().WantCaptureKeyboard;
+    double x = 0.0, y = 0.0;
+    glfwGetCursorPos(window, &x, &y);
+    const bool down = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+    if (down && !dragging && !ui_mouse) dragging = true;
+    if (!down) dragging = false;
+    if (dragging) {
+      const double k = 0.003;
+      camera.yaw_rad -= (x - last_x) * k;
+      camera.pitch_rad = std::clamp(camera.pitch_rad - (y - last_y) * k, -1.55, 1.55);
+    }
+    last_x = x;
+    last_y = y;
+    if (orbit) {
+      camera.position = orbit_target - camera.forward() * orbit_distance;
+      return;
+    }
+    if (ui_keys) return;
+    auto key = [&](int k) { return glfwGetKey(window, k) == GLFW_PRESS; };
+    double v = speed_mps * dt;
+    if (key(GLFW_KEY_LEFT_SHIFT) || key(GLFW_KEY_RIGHT_SHIFT)) v *= 5.0;
+    if (key(GLFW_KEY_W)) camera.position += camera.forward() * v;
+    if (key(GLFW_KEY_S)) camera.position -= camera.forward() * v;
+    if (key(GLFW_KEY_D)) camera.position += camera.right() * v;
+    if (key(GLFW_KEY_A)) camera.position -= camera.right() * v;
+    if (key(GLFW_KEY_E)) camera.position.z += v;
+    if (key(GLFW_KEY_Q)) camera.position.z -= v;
+  }
+};
+
+Navigator* g_navigator = nullptr;  // GLFW callbacks carry no user state beyond the window
+
+void onScroll(GLFWwindow*, double, double dy) {
+  if (!g_navigator || ImGui::GetIO().WantCaptureMouse) return;
+  const double factor = std::pow(1.25, dy);
+  if (g_navigator->orbit) g_navigator->orbit_distance /= factor;
+  else g_navigator->speed_mps *= factor;
+}
+
+void runView(const ViewArgs& args) {
+  int width = 0, height = 0;
+  parseImageSize(args.size, "--size", width, height);
+  GlfwSession glfw;
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  GLFWwindow* window = glfwCreateWindow(width, height, "TeraWalk", nullptr, nullptr);
+  if (!window) throw std::runtime_error("GLFW: cannot create a GL 4.5 core window");
+  glfwMakeContextCurrent(window);
+  glfwSwapInterval(0);
+
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr;
+  ImGui_ImplGlfw_InitForOpenGL(window, true);
+  ImGui_ImplOpenGL3_Init("#version 450");
+
+  {
+    WalkthroughOptions options;
+    glfwGetFramebufferSize(window, &options.width, &options.height);
+    options.tau_px = args.tau_px;
+    options.target_fps = args.target_fps;
+    options.finish_each_frame = false;
+    options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
+    Walkthrough walk(args.file, options);
+
+    Aabb bounds;
+    bounds.add(walk.worldMin());
+    bounds.add(walk.worldMax());
+    const double diagonal = glm::length(bounds.max - bounds.min);
+    Navigator nav;
+    g_navigator = &nav;
+    glfwSetScrollCallback(window, onScroll);
+    nav.speed_mps = std::max(1.0, diagonal / 30.0);
+    nav.orbit_target = 0.5 * (bounds.min + bounds.max);
+    nav.orbit_distance = diagonal;
+
+    CameraPath replay;
+    if (!args.path_file.empty()) replay = readCameraPath(args.path_file);
+    Camera camera = generateOrbitPath(bounds, 2).sample(0.0);
+    camera.near_m = 0.05;
+    camera.far_m = std::max(100.0, 10.0 * diagonal);
+    if (!replay.keys.empty()) camera = replay.sample(replay.keys.front().time_s, camera);
+
+    CameraPath recording;
+    bool recording_on = false;
+    float tau = float(walk.tau());
+    float fov_deg = float(glm::degrees(camera.fov_y_rad));
+    float near_m = float(camera.near_m), far_m = float(camera.far_m);
+    float min_feature = 1.0f;
+    int shot = 0;
+    bool key_latch[512] = {};
+    auto pressed = [&](int key) {
+      const bool down = glfwGetKey(window, key) == GLFW_PRESS;
+      const bool edge = down && !key_latch[key];
+      key_latch[key] = down;
+      return edge && !ImGui::GetIO().WantCaptureKeyboard;
+    };
+
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    auto last = start;
+    FrameStats stats;
+    for (int frame = 0; !glfwWindowShouldClose(window); ++frame) {
+      glfwPollEvents();
+      const auto now = Clock::now();
+      const double dt = std::chrono::duration<double>(now - last).count();
+      const double t = std::chrono::duration<double>(now - start).count();
+      last = now;
+
+      if (pressed(GLFW_KEY_O)) {
+        nav.orbit = !nav.orbit;
+        if (nav.orbit) nav.orbit_distance = glm::length(camera.position - nav.orbit_target);
+      }
+      if (pressed(GLFW_KEY_R)) {
+        recording_on = !recording_on;
+        if (!recording_on && !recording.keys.empty()) {
+          writeCameraPath(recording, args.record_file);
+          std::fprintf(stderr, "view: recorded %zu keys to %s\n", recording.keys.size(),
+                       args.record_file.c_str());
+        }
+        if (recording_on) recording.keys.clear();
+      }
+      if (pressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window, GLFW_TRUE);
+
+      if (!replay.keys.empty()) {
+        const double span = std::max(replay.durationS(), 1e-6);
+        camera = replay.sample(replay.keys.front().time_s + std::fmod(t, span), camera);
+      } else {
+        nav.update(window, camera, dt);
+      }
+      camera.fov_y_rad = glm::radians(double(fov_deg));
+      camera.near_m = near_m;
+      camera.far_m = far_m;
+      if (recording_on && (recording.keys.empty() || t > recording.keys.back().time_s + 1e-3))
+        recording.keys.push_back({t, camera});
+
+      int fb_w = 0, fb_h = 0;
+      glfwGetFramebufferSize(window, &fb_w, &fb_h);
+      if (fb_w > 0 && fb_h > 0 && (fb_w != walk.renderer().width() || fb_h != walk.renderer().height()))
+        walk.renderer().resize(fb_w, fb_h);
+      if (options.target_fps <= 0.0) walk.setTau(tau);
+      walk.setMinFeaturePx(min_feature);
+      stats = walk.renderFrame(camera, t);
+      tau = float(walk.tau());
+
+      if (pressed(GLFW_KEY_F12)) {
+        char name[64];
+        std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
+        saveScreenshot(walk.renderer(), name);
+      }
+      walk.renderer().blitToScreen(fb_w, fb_h);
+
+      ImGui_ImplOpenGL3_NewFrame();
+      ImGui_ImplGlfw_NewFrame();
+      ImGui::NewFrame();
+      ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+      ImGui::Begin("TeraWalk");
+      ImGui::Text("%.1f ms  (%.0f fps)   cut %.2f ms   gpu %.2f ms", stats.frame_ms,
+                  stats.frame_ms > 0 ? 1000.0 / stats.frame_ms : 0.0, stats.cpu_cut_ms, stats.gpu_ms);
+      ImGui::Text("triangles %llu   clusters %u   visited %u",
+                  static_cast<unsigned long long>(stats.triangles_drawn), stats.nodes_drawn,
+                  stats.nodes_visited);
+      ImGui::Text("pages resident %u  queued %u  loaded %u   fallbacks %u", stats.pages_resident,
+                  stats.pages_requested, stats.pages_loaded, stats.ancestor_fallbacks);
+      ImGui::Text("GPU pool %.0f MiB   RSS %.0f MiB", stats.gpu_bytes_used / 1048576.0,
+                  stats.rss_bytes / 1048576.0);
+      if (stats.parametric_skipped > 0)
+        ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
+                           stats.parametric_skipped);
+      ImGui::SliderFloat("tau (px)", &tau, 0.25f, 64.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
+      ImGui::SliderFloat("FOV (deg)", &fov_deg, 20.0f, 120.0f, "%.0f");
+      ImGui::SliderFloat("near (m)", &near_m, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
+      ImGui::SliderFloat("far (m)", &far_m, 100.0f, 1e6f, "%.0f", ImGuiSliderFlags_Logarithmic);
+      ImGui::SliderFloat("min feature (px)", &min_feature, 0.0f, 8.0f, "%.1f");
+      ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
+                  nav.orbit ? "orbit" : "walk", nav.speed_mps, recording_on ? " (on)" : "");
+      ImGui::End();
+      ImGui::Render();
+      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+      glfwSwapBuffers(window);
+
+      if (args.frames > 0 && frame + 1 >= args.frames) {
+        if (!args.screenshot.empty()) saveScreenshot(walk.renderer(), args.screenshot);
+        break;
+      }
+    }
+    if (recording_on && !recording.keys.empty()) writeCameraPath(recording, args.record_file);
+    g_navigator = nullptr;
+  }
+  ImGui_ImplOpenGL3_Shutdown();
+  ImGui_ImplGlfw_Shutdown();
+  ImGui::DestroyContext();
+  glfwDestroyWindow(window);
+}
+
+}  // namespace
+
+void registerViewCommand(CLI::App& app, const GlobalOptions&) {
+  auto args = std::make_shared<ViewArgs>();
+  CLI::App* cmd = app.add_subcommand("view", "Walk through a package in a window (GLFW)");
+  cmd->add_option("file", args->file, "Package (.twk)")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--size", args->size, "Window size WIDTHxHEIGHT")->capture_default_str();
+  cmd->add_option("--path", args->path_file, "Replay this camera path (loops)")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--record", args->record_file, "File the R key records the camera path to")
+      ->capture_default_str();
+  cmd->add_option("--gpu-budget", args->gpu_budget, "GPU geometry pool size")->capture_default_str();
+  cmd->add_option("--tau", args->tau_px, "Screen-space error threshold, pixels")
+      ->capture_default_str();
+  cmd->add_option("--target-fps", args->target_fps, "Adapt tau to hold this frame rate");
+  cmd->add_option("--frames", args->frames, "Quit after this many frames (scripted runs)");
+  cmd->add_option("--screenshot", args->screenshot, "With --frames: save the last frame here");
+  cmd->callback([args] { runView(*args); });
+}
+
+}  // namespace tw
