@@ -21,7 +21,7 @@ namespace fs = std::filesystem;
 
 fs::path bunnyPackage() {
   static const fs::path path = [] {
-    fs::path out = test::scratchDir() / "bunny.twk";
+    fs::path out = test::processScratchDir("frame_loop_bunny") / "bunny.twk";
     PreprocessOptions options;
     options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
     options.output = out;

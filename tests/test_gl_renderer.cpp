@@ -582,8 +582,7 @@ TEST_F(GlRendererTest, TriangleObjectsBeyondTheShaderStorageBlockLimit) {
 
 const fs::path& bunnyPackage() {
   static const fs::path path = [] {
-    fs::path dir = test::scratchRoot() / "terawalk-tests" / "gl_renderer_bunny";
-    fs::create_directories(dir);
+    fs::path dir = test::processScratchDir("gl_renderer_bunny");
     PreprocessOptions options;
     options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
     options.output = dir / "bunny.twk";

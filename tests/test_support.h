@@ -2,6 +2,8 @@
 // truncate-and-corrupt harness every reader test runs its fixtures through.
 #pragma once
 
+#include <unistd.h>
+
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -37,6 +39,19 @@ inline std::filesystem::path scratchDir() {
     if (c == '/') c = '_';
   auto dir = scratchRoot() / "terawalk-tests" / name;
   std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+// A fresh directory shared by every test of this process, for fixtures built once per test program
+// (a package several tests render). Named by the process id, because ctest runs the tests of one
+// program as parallel processes, and kept apart from scratchDir(), which each test clears.
+inline std::filesystem::path processScratchDir(const std::string& name) {
+  static const std::string suffix = "-" + std::to_string(::getpid());
+  auto dir = scratchRoot() / "terawalk-tests" / (name + suffix);
+  static bool cleared = false;
+  if (!cleared) std::filesystem::remove_all(dir);
+  cleared = true;
   std::filesystem::create_directories(dir);
   return dir;
 }
