@@ -2,6 +2,7 @@
 #include "package_writer.h"
 
 #include <unistd.h>
+#include <xxhash.h>
 
 #include <algorithm>
 #include <cerrno>
@@ -56,6 +57,23 @@ class TempFile {
     if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes) ioFail("cannot write");
     written_ += bytes;
   }
+  // Appends the first `bytes` of `source` in chunks (the page spill: never all in memory).
+  void copyFrom(const std::filesystem::path& source, uint64_t bytes) {
+    std::FILE* in = std::fopen(source.c_str(), "rb");
+    if (!in) ioFail("cannot read " + source.string() + " for");
+    std::vector<uint8_t> chunk(std::min<uint64_t>(bytes, 4u << 20));
+    uint64_t left = bytes;
+    while (left > 0) {
+      const size_t n = static_cast<size_t>(std::min<uint64_t>(left, chunk.size()));
+      if (std::fread(chunk.data(), 1, n, in) != n) {
+        std::fclose(in);
+        ioFail("short read of " + source.string() + " for");
+      }
+      write(chunk.data(), n);
+      left -= n;
+    }
+    std::fclose(in);
+  }
   void padTo(uint64_t offset) {
     static const uint8_t kZeros[kSectionAlignment] = {};
     while (written_ < offset) write(kZeros, std::min<uint64_t>(offset - written_, sizeof(kZeros)));
@@ -87,7 +105,96 @@ class TempFile {
   bool committed_ = false;
 };
 
+// One page as the file stores it: zstd when that shrinks it, raw otherwise. Fills the record's
+// sizes, codec and checksum (not its offset or cluster count); returns the stored bytes, which
+// point into `raw` or `compressed`.
+std::span<const uint8_t> storePage(std::span<const uint8_t> raw, const PackageWriteOptions& options,
+                                   std::vector<uint8_t>& compressed, PageRecord& p) {
+  p.raw_bytes = static_cast<uint32_t>(raw.size());
+  compressed.clear();
+  if (options.zstd && !raw.empty()) compressPage(raw, options.zstd_level, compressed);
+  const bool use_zstd = options.zstd && !raw.empty() && compressed.size() < raw.size();
+  std::span<const uint8_t> stored = use_zstd ? std::span<const uint8_t>(compressed) : raw;
+  p.codec = static_cast<uint32_t>(use_zstd ? PageCodec::Zstd : PageCodec::None);
+  p.stored_bytes = static_cast<uint32_t>(stored.size());
+  p.checksum = packageSectionChecksum(stored);
+  return stored;
+}
+
 }  // namespace
+
+// The page-data section's first bytes, in a file: pages compressed and laid out exactly as
+// writePackage lays them out (each at a multiple of kSectionAlignment from the section start,
+// zero padding between), with their records and a running XXH3 of the section so far.
+class PageSpill {
+ public:
+  PageSpill(const std::filesystem::path& path, const PackageWriteOptions& options)
+      : path_(path), options_(options), hash_(XXH3_createState()) {
+    if (!hash_) throw std::bad_alloc();
+    XXH3_64bits_reset(hash_);
+    file_ = std::fopen(path.c_str(), "wb");
+    if (!file_) ioFail("cannot create");
+  }
+  ~PageSpill() {
+    if (file_) std::fclose(file_);
+    XXH3_freeState(hash_);
+  }
+  PageSpill(const PageSpill&) = delete;
+  PageSpill& operator=(const PageSpill&) = delete;
+
+  void append(std::span<const uint8_t> raw) {
+    if (raw.size() > kMaxPageRawBytes)
+      throw std::invalid_argument("package: page " + std::to_string(records_.size()) +
+                                  " is over the size limit");
+    PageRecord p{};
+    std::span<const uint8_t> stored = storePage(raw, options_, compressed_, p);
+    static const uint8_t kZeros[kSectionAlignment] = {};
+    p.offset = alignUp(bytes_, kSectionAlignment);
+    write(kZeros, p.offset - bytes_);
+    write(stored.data(), stored.size());
+    records_.push_back(p);
+    raw_bytes_ += raw.size();
+  }
+  // Makes everything appended readable through another handle.
+  void flush() const {
+    if (std::fflush(file_) != 0) ioFail("cannot write");
+  }
+  // XXH3-64 of the spilled bytes followed by `tail`: the section checksum.
+  uint64_t checksumWith(std::span<const uint8_t> tail) const {
+    XXH3_state_t* copy = XXH3_createState();
+    if (!copy) throw std::bad_alloc();
+    XXH3_copyState(copy, hash_);
+    if (!tail.empty()) XXH3_64bits_update(copy, tail.data(), tail.size());
+    uint64_t sum = XXH3_64bits_digest(copy);
+    XXH3_freeState(copy);
+    return sum;
+  }
+  const std::filesystem::path& path() const { return path_; }
+  const PackageWriteOptions& options() const { return options_; }
+  const std::vector<PageRecord>& records() const { return records_; }
+  uint64_t bytes() const { return bytes_; }
+  uint64_t rawBytes() const { return raw_bytes_; }
+
+ private:
+  void write(const void* data, size_t bytes) {
+    if (bytes == 0) return;
+    if (std::fwrite(data, 1, bytes, file_) != bytes) ioFail("cannot write");
+    XXH3_64bits_update(hash_, data, bytes);
+    bytes_ += bytes;
+  }
+  [[noreturn]] void ioFail(const char* what) const {
+    throw std::runtime_error(path_.string() + ": " + what + " page spill file: " +
+                             std::strerror(errno));
+  }
+  std::filesystem::path path_;
+  PackageWriteOptions options_;
+  XXH3_state_t* hash_;
+  std::FILE* file_ = nullptr;
+  std::vector<PageRecord> records_;
+  std::vector<uint8_t> compressed_;
+  uint64_t bytes_ = 0;
+  uint64_t raw_bytes_ = 0;
+};
 
 void setClusterLod(pkg::ClusterRecord& r, const ClusterLod& lod, const glm::vec3& fallback_center,
                    float fallback_radius) {
@@ -142,6 +249,10 @@ void PackageStorage::placeEncodedCluster(std::span<const uint8_t> encoded, Clust
   uint64_t offset = pages.empty() ? 0 : alignUp(pages.back().size(), kClusterAlignment);
   if (pages.empty() || (!pages.back().empty() && offset + encoded.size() > target_page_bytes) ||
       offset + encoded.size() > kMaxPageRawBytes) {
+    if (spill && !pages.empty()) {  // the open page is complete: out of memory with it
+      spill->append(pages.back());
+      pages.clear();
+    }
     pages.emplace_back();
     pages.back().reserve(target_page_bytes);
     offset = 0;
@@ -149,10 +260,23 @@ void PackageStorage::placeEncodedCluster(std::span<const uint8_t> encoded, Clust
   std::vector<uint8_t>& page = pages.back();
   page.resize(offset, 0);
   page.insert(page.end(), encoded.begin(), encoded.end());
-  record.page = static_cast<uint32_t>(pages.size() - 1);
+  record.page = pageCount() - 1;
   record.page_offset = static_cast<uint32_t>(offset);
   record.encoded_bytes = static_cast<uint32_t>(encoded.size());
 }
+
+void PackageStorage::spillPagesTo(const std::filesystem::path& spill_path,
+                                  const PackageWriteOptions& options) {
+  if (spill || !pages.empty())
+    throw std::logic_error("package: spillPagesTo must be called before any page exists");
+  spill = std::make_shared<PageSpill>(spill_path, options);
+}
+
+uint32_t PackageStorage::pageCount() const {
+  return static_cast<uint32_t>((spill ? spill->records().size() : 0) + pages.size());
+}
+
+uint64_t PackageStorage::spilledPageBytes() const { return spill ? spill->bytes() : 0; }
 
 uint32_t PackageStorage::addMeshCluster(const ClusterGeometryInput& geometry, const ClusterLod& lod,
                                         bool optimize) {
@@ -335,8 +459,21 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
                                const PackageWriteOptions& options) {
   PackageWriteStats stats;
 
-  // Pages: compress each, keep the raw bytes when compression does not help.
-  std::vector<PageRecord> page_records(storage.pages.size());
+  // Pages: compress each, keep the raw bytes when compression does not help. Spilled pages are
+  // already stored: the section is the spill file's bytes followed by `page_data`.
+  const PageSpill* spill = storage.spill.get();
+  if (spill && (spill->options().zstd != options.zstd ||
+                (options.zstd && spill->options().zstd_level != options.zstd_level)))
+    throw std::invalid_argument("writePackage: options differ from the page spill's");
+  const uint64_t spilled_bytes = spill ? spill->bytes() : 0;
+  std::vector<PageRecord> page_records;
+  if (spill) {
+    spill->flush();
+    page_records = spill->records();
+    stats.page_raw_bytes = spill->rawBytes();
+  }
+  const size_t first_memory_page = page_records.size();
+  page_records.resize(first_memory_page + storage.pages.size());
   for (const ClusterRecord& c : storage.clusters)
     if (c.kind == static_cast<uint8_t>(ClusterKind::Mesh) && c.page < page_records.size())
       ++page_records[c.page].cluster_count;
@@ -344,20 +481,15 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   std::vector<uint8_t> compressed;
   for (size_t i = 0; i < storage.pages.size(); ++i) {
     const std::vector<uint8_t>& raw = storage.pages[i];
+    const size_t index = first_memory_page + i;
     if (raw.size() > kMaxPageRawBytes)
-      throw std::invalid_argument("package: page " + std::to_string(i) + " is over the size limit");
+      throw std::invalid_argument("package: page " + std::to_string(index) +
+                                  " is over the size limit");
     stats.page_raw_bytes += raw.size();
-    PageRecord& p = page_records[i];
-    p.offset = alignUp(page_data.size(), kSectionAlignment);
-    page_data.resize(p.offset, 0);
-    p.raw_bytes = static_cast<uint32_t>(raw.size());
-    compressed.clear();
-    if (options.zstd && !raw.empty()) compressPage(raw, options.zstd_level, compressed);
-    const bool use_zstd = options.zstd && !raw.empty() && compressed.size() < raw.size();
-    const std::vector<uint8_t>& stored = use_zstd ? compressed : raw;
-    p.codec = static_cast<uint32_t>(use_zstd ? PageCodec::Zstd : PageCodec::None);
-    p.stored_bytes = static_cast<uint32_t>(stored.size());
-    p.checksum = packageSectionChecksum(stored);
+    PageRecord& p = page_records[index];
+    p.offset = alignUp(spilled_bytes + page_data.size(), kSectionAlignment);
+    page_data.resize(p.offset - spilled_bytes, 0);
+    std::span<const uint8_t> stored = storePage(raw, options, compressed, p);
     page_data.insert(page_data.end(), stored.begin(), stored.end());
   }
 
@@ -407,7 +539,7 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
       {storage.layers.data(), storage.layers.size()},
       {storage.strings.data(), storage.strings.size()},
       {storage.visibility.data(), storage.visibility.size()},
-      {page_data.data(), page_data.size()},
+      {page_data.data(), spilled_bytes + page_data.size()},
   };
   SectionEntry table[kSectionCount] = {};
   uint64_t cursor = sizeof(PackageHeader) + sizeof(table);
@@ -418,8 +550,11 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
     e.count = pieces[i].count;
     e.bytes = pieces[i].count * kSectionRecordBytes[i];
     e.offset = alignUp(cursor, kSectionAlignment);
-    e.checksum = packageSectionChecksum(
-        {static_cast<const uint8_t*>(pieces[i].data), static_cast<size_t>(e.bytes)});
+    if (i == static_cast<uint32_t>(SectionType::PageData) && spill)
+      e.checksum = spill->checksumWith(page_data);
+    else
+      e.checksum = packageSectionChecksum(
+          {static_cast<const uint8_t*>(pieces[i].data), static_cast<size_t>(e.bytes)});
     cursor = e.offset + e.bytes;
     stats.section_bytes[i] = e.bytes;
   }
@@ -432,7 +567,12 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   out.write(table, sizeof(table));
   for (uint32_t i = 0; i < kSectionCount; ++i) {
     out.padTo(table[i].offset);
-    out.write(pieces[i].data, table[i].bytes);
+    if (i == static_cast<uint32_t>(SectionType::PageData) && spill) {
+      out.copyFrom(spill->path(), spilled_bytes);
+      out.write(page_data.data(), page_data.size());
+    } else {
+      out.write(pieces[i].data, table[i].bytes);
+    }
   }
   out.close();
   // The view's checks are the definition of a valid package: refuse to publish anything else.

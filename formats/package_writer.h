@@ -4,12 +4,15 @@
 // writePackage lays the sections out (docs/package-format.md), compresses pages, checksums each
 // section with XXH3-64 and writes everything to "<path>.tmp-<pid>", which it re-opens with
 // PackageView (so the writer never produces a file its reader rejects) and renames onto `path`.
-// Memory: the whole package is held in memory; a streaming writer is future work.
+// Memory: the tables (clusters, groups, instances, objects, strings) are held in memory; pages are
+// too unless spillPagesTo() streams each finished page, compressed, to a spill file, which
+// writePackage then copies into the package in chunks.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <span>
 #include <string>
 #include <string_view>
@@ -39,6 +42,13 @@ struct ClusterLod {
 void setClusterLod(pkg::ClusterRecord& record, const ClusterLod& lod,
                    const glm::vec3& fallback_center, float fallback_radius);
 
+struct PackageWriteOptions {
+  bool zstd = true;  // compress pages; a page that does not shrink is stored raw
+  int zstd_level = 9;
+};
+
+class PageSpill;  // package_writer.cpp: finished pages, compressed, in a file
+
 struct PackageStorage {
   // Build constants copied into the header.
   glm::dvec3 origin{0.0};  // world metres; all floats are relative to it
@@ -67,6 +77,18 @@ struct PackageStorage {
   // grow past target_page_bytes; fills record.page, page_offset and encoded_bytes.
   void placeEncodedCluster(std::span<const uint8_t> encoded, pkg::ClusterRecord& record);
 
+  // Streams pages out of memory: from now on, each page is compressed with `options` (exactly as
+  // writePackage would) and appended to the file `spill_path` (created or truncated) as soon as
+  // the next page opens, so `pages` keeps only the open page. Page numbers in cluster records stay
+  // global: page i is the i-th page ever opened (spilled pages first, then `pages`). writePackage
+  // copies the spilled bytes in chunks and must get the same options. Call before any page exists
+  // (throws std::logic_error otherwise); throws std::runtime_error on I/O failure. The caller owns
+  // the spill file and removes it (it belongs in a work directory); copies of the storage share it.
+  void spillPagesTo(const std::filesystem::path& spill_path, const PackageWriteOptions& options = {});
+  uint32_t pageCount() const;  // spilled + in memory
+  uint64_t spilledPageBytes() const;  // page-data bytes already in the spill file
+  std::shared_ptr<PageSpill> spill;  // null unless spillPagesTo was called
+
   // Encodes `geometry` (page_codec.h) with this package's step, places it in a page and appends
   // its cluster record with bounds from the decoded positions; returns the cluster index.
   // Throws std::invalid_argument on bad geometry.
@@ -85,11 +107,6 @@ struct PackageStorage {
 // Conservative box of an instance in the package frame (its parameters' local box, transformed).
 void instanceBounds(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points,
                     glm::vec3& aabb_min, glm::vec3& aabb_max);
-
-struct PackageWriteOptions {
-  bool zstd = true;  // compress pages; a page that does not shrink is stored raw
-  int zstd_level = 9;
-};
 
 // What was written, for reports.
 struct PackageWriteStats {

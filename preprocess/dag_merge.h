@@ -33,4 +33,25 @@ namespace tw {
 // recounted over the whole DAG.
 ClusterDag mergeBrickDags(std::vector<ClusterDag> bricks, const DagOptions& options = {});
 
+// The merge from the bricks' roots alone, for a preprocessor that keeps only those in memory (the
+// full brick DAGs wait on disk). `roots` are every brick's root clusters (parent_group ==
+// kNoGroup), brick after brick, each in its brick's cluster order. The result's clusters are
+// first those roots, in the same order (front_count of them), with parent_group (an index into
+// result.dag.groups), parent_error and parent_lod_* set where a merged group took them, then the
+// merged clusters; its groups are the merged groups, children and clusters indexing
+// result.dag.clusters. Stats hold the merge's own counts; triangles_per_level,
+// clusters_per_level and root_triangles count the roots and the merged clusters. Exactly what
+// mergeBrickDags builds on top of the bricks (it is implemented with this).
+struct MergedRoots {
+  ClusterDag dag;
+  uint32_t front_count = 0;
+};
+MergedRoots mergeBrickRoots(std::vector<DagCluster> roots, const DagOptions& options = {});
+
+// Bookkeeping shared with the preprocessor, which sums bricks without holding them: `to` += the
+// counters of `from` (root_within_limit untouched); triangles_per_level, clusters_per_level and
+// root_triangles recounted from dag.clusters.
+void addStats(DagBuildStats& to, const DagBuildStats& from);
+void countLevels(ClusterDag& dag);
+
 }  // namespace tw

@@ -7,12 +7,11 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "position_key.h"
+#include "quantization_snap.h"
 
 namespace tw {
 
@@ -31,112 +30,29 @@ void setVec3(float out[3], const glm::vec3& v) {
 
 uint32_t rebase(uint32_t index, uint32_t base) { return index == kNoGroup ? kNone : index + base; }
 
-// The shift encodeCluster will pick (page_codec.cpp, same arithmetic): the smallest one from
-// `min_shift` whose cells hold the cluster's extent in 16 bits and its grid origin in int32.
-// Returns kMaxPositionShift + 1 when none does (the encoder then refuses the cluster).
-uint32_t requiredShift(const std::vector<glm::vec3>& positions, double step, uint32_t min_shift) {
-  double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::numeric_limits<double>::max();
-    hi[a] = -std::numeric_limits<double>::max();
-  }
-  for (const glm::vec3& p : positions)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], double(p[a]));
-      hi[a] = std::max(hi[a], double(p[a]));
-    }
-  for (uint32_t shift = min_shift; shift <= kMaxPositionShift; ++shift) {
-    const double cell = std::ldexp(step, int(shift));
-    bool fits = true;
-    for (int a = 0; a < 3 && fits; ++a) {
-      double glo = std::nearbyint(lo[a] / cell), ghi = std::nearbyint(hi[a] / cell);
-      fits = glo >= -2147483648.0 && glo <= 2147483647.0 && ghi - glo <= 65535.0;
-    }
-    if (fits) return shift;
-  }
-  return kMaxPositionShift + 1;
-}
-
-// Positions as the package will hold them: each vertex snapped to the grid of the coarsest
-// shift among all clusters that use it (clusters of different levels share locked border
-// vertices, and clusters pick their shift by extent). A vertex on the grid of shift S is
-// quantized exactly by every cluster of shift <= S (cells are nested powers of two of the step),
-// so every cluster decodes a shared vertex to the same point and cuts stay closed after
-// quantization. A vertex moves by at most half a cell of that coarsest shift.
-struct SnappedDag {
-  std::vector<std::vector<glm::vec3>> positions;  // per cluster
-  std::vector<uint32_t> shifts;                   // per cluster
-  uint32_t max_shift = 0;
-  uint64_t coarsened_vertices = 0;  // welded vertices snapped coarser than their finest cluster
-};
-
-SnappedDag snapToSharedGrids(const ClusterDag& dag, double step) {
-  const size_t n = dag.clusters.size();
-  SnappedDag out;
-  out.positions.resize(n);
-  out.shifts.assign(n, 0);
-  std::unordered_map<PositionKey, uint32_t, PositionHash> weld;
-  std::vector<std::vector<uint32_t>> global(n);
-  for (size_t c = 0; c < n; ++c) {
-    const DagCluster& cl = dag.clusters[c];
-    global[c].resize(cl.positions.size());
-    for (size_t v = 0; v < cl.positions.size(); ++v)
-      global[c][v] =
-          weld.emplace(positionKeyOf(cl.positions[v]), uint32_t(weld.size())).first->second;
-  }
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const auto& range) {
-    for (size_t c = range.begin(); c != range.end(); ++c)
-      out.shifts[c] = requiredShift(dag.clusters[c].positions, step, 0);
-  });
-  std::vector<uint32_t> finest(weld.size(), kMaxPositionShift + 1);
-  for (size_t c = 0; c < n; ++c)
-    for (uint32_t g : global[c]) finest[g] = std::min(finest[g], out.shifts[c]);
-  std::vector<uint32_t> vertex_shift(weld.size());
-  // Snapping can widen a cluster past its shift; then its shift grows and the snap is redone.
-  // Shifts only grow and are bounded, so this ends (in practice after one or two rounds).
-  for (bool changed = true; changed;) {
-    std::fill(vertex_shift.begin(), vertex_shift.end(), 0u);
-    for (size_t c = 0; c < n; ++c)
-      for (uint32_t g : global[c]) vertex_shift[g] = std::max(vertex_shift[g], out.shifts[c]);
-    std::vector<uint8_t> grew(n, 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const auto& range) {
-      for (size_t c = range.begin(); c != range.end(); ++c) {
-        const DagCluster& cl = dag.clusters[c];
-        std::vector<glm::vec3>& snapped = out.positions[c];
-        snapped.resize(cl.positions.size());
-        for (size_t v = 0; v < cl.positions.size(); ++v) {
-          const double cell = std::ldexp(step, int(vertex_shift[global[c][v]]));
-          for (int a = 0; a < 3; ++a)
-            snapped[v][a] = float(std::nearbyint(double(cl.positions[v][a]) / cell) * cell);
-        }
-        const uint32_t shift = requiredShift(snapped, step, out.shifts[c]);
-        if (shift > kMaxPositionShift) continue;  // the encoder reports it
-        if (shift != out.shifts[c]) {
-          out.shifts[c] = shift;
-          grew[c] = 1;
-        }
-      }
-    });
-    changed = std::find(grew.begin(), grew.end(), uint8_t{1}) != grew.end();
-  }
-  for (size_t g = 0; g < vertex_shift.size(); ++g) {
-    out.max_shift = std::max(out.max_shift, vertex_shift[g]);
-    out.coarsened_vertices += vertex_shift[g] > finest[g];
-  }
-  return out;
-}
-
 }  // namespace
 
-DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
+DagPlacement beginDagPlacement(const PackageStorage& storage) {
   DagPlacement placement;
   placement.first_cluster = uint32_t(storage.clusters.size());
   placement.first_group = uint32_t(storage.groups.size());
+  return placement;
+}
+
+void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_t first_group,
+                          const std::vector<std::vector<glm::vec3>>& snapped,
+                          const std::vector<uint32_t>& shifts, DagPlacement& placement,
+                          PackageStorage& storage) {
+  if (uint64_t(placement.first_cluster) + first_cluster != storage.clusters.size() ||
+      uint64_t(placement.first_group) + first_group != storage.groups.size())
+    throw std::invalid_argument("addDagPieceToPackage: piece added out of order");
+  if (snapped.size() != dag.clusters.size() || shifts.size() != dag.clusters.size())
+    throw std::invalid_argument("addDagPieceToPackage: one snapped cluster and shift per cluster");
   if (uint64_t(storage.clusters.size()) + dag.clusters.size() >= kNone ||
       uint64_t(storage.groups.size()) + dag.groups.size() >= kNone)
     throw std::invalid_argument("addDagToPackage: too many clusters or groups for the format");
 
-  // Check the DAG before writing anything that depends on it.
+  // Check the piece before writing anything that depends on it.
   const size_t object_count = storage.objects.size();
   for (size_t c = 0; c < dag.clusters.size(); ++c) {
     const DagCluster& cl = dag.clusters[c];
@@ -144,28 +60,24 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
       throw std::invalid_argument("addDagToPackage: cluster level above 65535");
     for (uint32_t id : cl.triangle_object_ids)
       if (id >= object_count)
-        throw std::invalid_argument("addDagToPackage: cluster " + std::to_string(c) +
+        throw std::invalid_argument("addDagToPackage: cluster " + std::to_string(first_cluster + c) +
                                     " has object id " + std::to_string(id) + " but storage has " +
                                     std::to_string(object_count) + " objects");
   }
+  const uint64_t cluster_end = uint64_t(first_cluster) + dag.clusters.size();
   for (size_t g = 0; g < dag.groups.size(); ++g) {
     const std::vector<uint32_t>& made = dag.groups[g].clusters;
-    for (size_t i = 1; i < made.size(); ++i)
-      if (made[i] != made[0] + i)
-        throw std::invalid_argument("addDagToPackage: group " + std::to_string(g) +
-                                    " produced clusters that are not contiguous");
+    for (size_t i = 0; i < made.size(); ++i)
+      if (made[i] != made[0] + i || made[i] < first_cluster || made[i] >= cluster_end)
+        throw std::invalid_argument("addDagToPackage: group " + std::to_string(first_group + g) +
+                                    " produced clusters that are not contiguous in its piece");
+    for (uint32_t child : dag.groups[g].children)
+      if (child >= cluster_end)
+        throw std::invalid_argument("addDagToPackage: group " + std::to_string(first_group + g) +
+                                    " has a child after its piece");
   }
 
-  const SnappedDag snapped = snapToSharedGrids(dag, storage.position_step_m);
-  placement.max_shift = snapped.max_shift;
-  placement.coarsened_vertices = snapped.coarsened_vertices;
-  // Snapping moves a vertex by up to half a cell of the coarsest grid, which can carry it just
-  // outside the lod spheres the DAG computed from unsnapped positions. Every lod sphere grows by
-  // that much: the same amount everywhere, so siblings still share their spheres exactly and a
-  // parent's sphere still contains its children's.
-  const float lod_slack =
-      static_cast<float>(quantizationErrorM(storage.position_step_m, snapped.max_shift));
-  placement.lod_slack = lod_slack;
+  const float lod_slack = placement.lod_slack;
   ClusterEncodeOptions encode_options;
   encode_options.position_step_m = storage.position_step_m;
   std::vector<std::vector<uint8_t>> encoded;
@@ -179,18 +91,18 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
                         for (size_t i = range.begin(); i != range.end(); ++i) {
                           const DagCluster& cl = dag.clusters[batch + i];
                           ClusterGeometryInput geometry;
-                          geometry.positions = snapped.positions[batch + i];
+                          geometry.positions = snapped[batch + i];
                           geometry.indices = cl.indices;
                           geometry.triangle_objects = cl.triangle_object_ids;
                           ClusterEncodeOptions options = encode_options;
-                          options.min_shift = snapped.shifts[batch + i];
+                          options.min_shift = shifts[batch + i];
                           infos[i] = encodeCluster(geometry, options, encoded[i]);
                         }
                       });
     for (size_t i = 0; i < count; ++i) {
       const DagCluster& cl = dag.clusters[batch + i];
       const EncodedClusterInfo& info = infos[i];
-      if (info.shift != snapped.shifts[batch + i])
+      if (info.shift != shifts[batch + i])
         throw std::logic_error("addDagToPackage: the encoder chose another quantization shift");
       ClusterRecord r{};
       setVec3(r.center, info.center);
@@ -238,11 +150,29 @@ DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
     setVec3(r.aabb_max, hi);
     r.max_parent_error = g.error;
     for (uint32_t c : g.clusters)
-      r.max_parent_error = std::max(r.max_parent_error, dag.clusters[c].parent_error);
+      r.max_parent_error = std::max(r.max_parent_error, dag.clusters[c - first_cluster].parent_error);
     r.first_cluster = g.clusters.empty() ? 0 : placement.first_cluster + g.clusters[0];
     r.cluster_count = uint32_t(g.clusters.size());
     storage.groups.push_back(r);
   }
+}
+
+DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
+  DagPlacement placement = beginDagPlacement(storage);
+  QuantizationSnapper snapper(storage.position_step_m);
+  const SnapPiece whole{dag.clusters, {}, SharedPositions::None};
+  snapper.solve(0, whole);
+  std::vector<uint32_t> shifts;
+  const std::vector<std::vector<glm::vec3>> snapped = snapper.snap(0, whole, shifts);
+  placement.max_shift = snapper.maxShift();
+  placement.coarsened_vertices = snapper.coarsenedVertices();
+  // Snapping moves a vertex by up to half a cell of the coarsest grid, which can carry it just
+  // outside the lod spheres the DAG computed from unsnapped positions. Every lod sphere grows by
+  // that much: the same amount everywhere, so siblings still share their spheres exactly and a
+  // parent's sphere still contains its children's.
+  placement.lod_slack =
+      static_cast<float>(quantizationErrorM(storage.position_step_m, placement.max_shift));
+  addDagPieceToPackage(dag, 0, 0, snapped, shifts, placement, storage);
   return placement;
 }
 

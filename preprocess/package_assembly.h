@@ -43,4 +43,20 @@ struct DagPlacement {
 // the storage may then hold part of the DAG.
 DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage);
 
+// The same, a piece at a time, so a DAG far larger than memory can be packed (the preprocessor's
+// bricks, then its merged levels). `piece` holds DAG clusters [first_cluster, first_cluster +
+// clusters.size()) and DAG groups [first_group, ...), every index in it (group, parent_group,
+// children, clusters) in the whole DAG's numbering, and every field final (a brick root's parent
+// fields set by the merge). Pieces are added in DAG order. `placement` comes from
+// beginDagPlacement and has max_shift and lod_slack set by the caller for the whole DAG
+// (QuantizationSnapper, quantization_snap.h, which also gives each piece's `snapped` positions and
+// `shifts`); encoded_bytes and coarsened_vertices are the caller's to fill. A group's box reads
+// the records of its produced clusters, or of its children (earlier pieces) when it produced none.
+// Throws as addDagToPackage, and std::invalid_argument when the piece is out of order.
+DagPlacement beginDagPlacement(const PackageStorage& storage);
+void addDagPieceToPackage(const ClusterDag& piece, uint32_t first_cluster, uint32_t first_group,
+                          const std::vector<std::vector<glm::vec3>>& snapped,
+                          const std::vector<uint32_t>& shifts, DagPlacement& placement,
+                          PackageStorage& storage);
+
 }  // namespace tw

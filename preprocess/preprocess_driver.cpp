@@ -4,6 +4,8 @@
 #include <sys/resource.h>
 
 #include <chrono>
+#include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include <tbb/global_control.h>
@@ -15,6 +17,7 @@
 #include "package_assembly.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
+#include "quantization_snap.h"
 #include "scene_bricking.h"
 
 namespace tw {
@@ -53,8 +56,78 @@ class StageClock {
   Clock::time_point start_;
 };
 
+double secondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
 void throwIfCancelled(Progress* progress) {
   if (progress && progress->cancelled()) throw std::runtime_error("cancelled");
+}
+
+// The new parent of a brick root, from the merge (group in the whole DAG's numbering).
+struct RootParent {
+  uint32_t group = kNoGroup;
+  float error = std::numeric_limits<float>::infinity();
+  glm::vec3 lod_center{0.0f};
+  float lod_radius = 0.0f;
+};
+
+// What stays in memory of a finished brick while its DAG waits in the resume store.
+struct BrickRecord {
+  uint32_t first_cluster = 0;  // its clusters' and groups' first indices in the whole DAG
+  uint32_t first_group = 0;
+  uint32_t cluster_count = 0;
+  uint32_t group_count = 0;
+  std::vector<uint32_t> root_ids;  // brick-local, ascending
+  std::vector<RootParent> root_parents;  // one per root, after the merge
+  std::vector<uint8_t> exported;   // one per cluster: is a root (built on demand)
+};
+
+// A brick's snapping input: its seams and roots are shared with other pieces.
+SnapPiece brickSnapPiece(const ClusterDag& dag, BrickRecord& brick) {
+  if (dag.clusters.size() != brick.cluster_count)
+    throw std::runtime_error("preprocess: a brick changed in the resume store during the run");
+  brick.exported.assign(brick.cluster_count, 0);
+  for (uint32_t id : brick.root_ids) brick.exported[id] = 1;
+  return {dag.clusters, brick.exported, SharedPositions::SeamsAndRoots};
+}
+
+std::unique_ptr<ClusterDag> loadBrickDag(const BrickCache& cache, uint32_t b) {
+  std::optional<std::vector<uint8_t>> blob = cache.load(b);
+  if (!blob)
+    throw std::runtime_error("preprocess: brick " + std::to_string(b) +
+                             " vanished from the resume store " + cache.blobPath(b).string());
+  return std::make_unique<ClusterDag>(deserializeClusterDag(*blob, cache.blobPath(b).string()));
+}
+
+// Into the whole DAG's numbering, with the roots' parents from the merge.
+void renumberBrick(ClusterDag& dag, const BrickRecord& brick) {
+  auto rebase = [](uint32_t index, uint32_t base) {
+    return index == kNoGroup ? kNoGroup : index + base;
+  };
+  for (DagCluster& c : dag.clusters) {
+    c.group = rebase(c.group, brick.first_group);
+    c.parent_group = rebase(c.parent_group, brick.first_group);
+  }
+  for (DagGroup& g : dag.groups) {
+    for (uint32_t& child : g.children) child += brick.first_cluster;
+    for (uint32_t& made : g.clusters) made += brick.first_cluster;
+  }
+  for (size_t r = 0; r < brick.root_ids.size(); ++r) {
+    DagCluster& c = dag.clusters[brick.root_ids[r]];
+    const RootParent& parent = brick.root_parents[r];
+    c.parent_group = parent.group;
+    c.parent_error = parent.error;
+    c.parent_lod_center = parent.lod_center;
+    c.parent_lod_radius = parent.lod_radius;
+  }
+}
+
+void addLevels(std::vector<uint64_t>& triangles_per_level, const ClusterDag& dag) {
+  for (const DagCluster& c : dag.clusters) {
+    if (triangles_per_level.size() <= c.level) triangles_per_level.resize(c.level + 1, 0);
+    triangles_per_level[c.level] += c.triangleCount();
+  }
 }
 
 }  // namespace
@@ -110,47 +183,144 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   report.objects = scene.object_count;
   report.bricks = static_cast<uint32_t>(scene.bricks.size());
 
-  // 2. One LOD DAG per brick, seams locked so neighbouring bricks never crack.
+  // 2. One LOD DAG per brick, seams locked so neighbouring bricks never crack. A finished brick
+  // goes to the resume store; memory keeps its roots (for the merge) and its quantization shifts
+  // (snapping pass 1, solved now while it is in memory). The last brick's DAG stays too when it
+  // is within budget / 8, so a one-brick model is never read back.
   clock.start("build bricks");
   beginStage(progress, "build bricks", scene.bricks.size());
   DagOptions brick_options = dag_options;
   brick_options.lock_open_boundaries = true;
-  std::vector<ClusterDag> dags;
-  dags.reserve(scene.bricks.size());
+  PackageStorage storage;
+  QuantizationSnapper snapper(storage.position_step_m);
+  const uint64_t resident_limit = options.memory_budget_bytes / 8;
+  std::vector<BrickRecord> bricks(scene.bricks.size());
+  std::vector<std::unique_ptr<ClusterDag>> resident(scene.bricks.size());
+  std::vector<DagCluster> roots;
+  uint64_t total_clusters = 0, total_groups = 0;
+  double snap_in_build = 0.0, snap_in_pack = 0.0;  // reported as a stage of its own
   for (uint32_t b = 0; b < scene.bricks.size(); ++b) {
     throwIfCancelled(progress);
     std::optional<std::vector<uint8_t>> blob;
     if (options.resume) blob = cache.load(b);
+    ClusterDag dag;
     if (blob) {
-      dags.push_back(deserializeClusterDag(*blob, cache.blobPath(b).string()));
+      dag = deserializeClusterDag(*blob, cache.blobPath(b).string());
       ++report.bricks_reused;
     } else {
       BrickMesh mesh = loadBrick(scene, b);
-      ClusterDag dag = buildClusterDag(
+      dag = buildClusterDag(
           DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids}, brick_options);
-      cache.store(b, serializeClusterDag(dag));
-      dags.push_back(std::move(dag));
+      mesh = BrickMesh{};
+      blob = serializeClusterDag(dag);
+      cache.store(b, *blob);
     }
+    const uint64_t dag_bytes = blob->size();
+    blob.reset();
+    BrickRecord& brick = bricks[b];
+    brick.first_cluster = uint32_t(total_clusters);
+    brick.first_group = uint32_t(total_groups);
+    brick.cluster_count = uint32_t(dag.clusters.size());
+    brick.group_count = uint32_t(dag.groups.size());
+    total_clusters += dag.clusters.size();
+    total_groups += dag.groups.size();
+    if (total_clusters >= pkg::kNone || total_groups >= pkg::kNone)
+      throw std::runtime_error("preprocess: too many clusters or groups for the package format");
+    for (uint32_t c = 0; c < dag.clusters.size(); ++c)
+      if (dag.clusters[c].parent_group == kNoGroup) {
+        brick.root_ids.push_back(c);
+        roots.push_back(dag.clusters[c]);
+        report.merge_front_triangles += dag.clusters[c].triangleCount();
+      }
+    addLevels(report.triangles_per_level, dag);
+    // Only the last brick may stay: earlier ones would sit beside every later brick build, which
+    // is where the peak is. A one-brick model is then never read back (nor welded twice).
+    const bool keep = b + 1 == scene.bricks.size() && dag_bytes <= resident_limit;
+    const auto snap_start = Clock::now();
+    snapper.solve(b, brickSnapPiece(dag, brick), keep);
+    snap_in_build += secondsSince(snap_start);
+    if (keep) resident[b] = std::make_unique<ClusterDag>(std::move(dag));
     updateProgress(progress, b + 1);
   }
   endStage(progress);
   throwIfCancelled(progress);
 
-  // 3. Upper levels from all the bricks' roots.
+  // 3. Upper levels from all the bricks' roots, renumbered after the bricks' clusters and groups;
+  // the roots' new parents are noted for when their bricks are packed.
   clock.start("merge");
   beginStage(progress, "merge bricks", 0);
-  ClusterDag dag = mergeBrickDags(std::move(dags), dag_options);
+  ClusterDag upper;
+  {
+    MergedRoots merged = mergeBrickRoots(std::move(roots), dag_options);
+    roots = {};
+    report.root_triangles = merged.dag.root_triangles;
+    std::vector<uint32_t> root_global;  // merged front index -> DAG cluster
+    for (BrickRecord& brick : bricks) {
+      for (uint32_t id : brick.root_ids) root_global.push_back(brick.first_cluster + id);
+      brick.root_parents.resize(brick.root_ids.size());
+    }
+    const uint32_t front = merged.front_count;
+    auto group_id = [&](uint32_t g) {
+      return g == kNoGroup ? kNoGroup : uint32_t(total_groups) + g;
+    };
+    auto cluster_id = [&](uint32_t id) {
+      return id < front ? root_global[id] : uint32_t(total_clusters) + id - front;
+    };
+    uint32_t f = 0;
+    for (BrickRecord& brick : bricks)
+      for (RootParent& parent : brick.root_parents) {
+        const DagCluster& root = merged.dag.clusters[f++];
+        parent = {group_id(root.parent_group), root.parent_error, root.parent_lod_center,
+                  root.parent_lod_radius};
+      }
+    for (uint32_t i = front; i < merged.dag.clusters.size(); ++i) {
+      DagCluster& c = merged.dag.clusters[i];
+      c.group = group_id(c.group);
+      c.parent_group = group_id(c.parent_group);
+      upper.clusters.push_back(std::move(c));
+    }
+    for (DagGroup& g : merged.dag.groups) {
+      for (uint32_t& child : g.children) child = cluster_id(child);
+      for (uint32_t& made : g.clusters) made = cluster_id(made);
+      upper.groups.push_back(std::move(g));
+    }
+    addLevels(report.triangles_per_level, upper);
+  }
+  if (total_clusters + upper.clusters.size() >= pkg::kNone ||
+      total_groups + upper.groups.size() >= pkg::kNone)
+    throw std::runtime_error("preprocess: too many clusters or groups for the package format");
+  const uint32_t upper_piece = uint32_t(bricks.size());
+  const SnapPiece upper_snap{upper.clusters, {}, SharedPositions::All};
+  snapper.solve(upper_piece, upper_snap, true);
   endStage(progress);
-  report.triangles_per_level = dag.triangles_per_level;
-  report.root_triangles = dag.root_triangles;
-  report.clusters = dag.clusters.size();
+  report.clusters = total_clusters + upper.clusters.size();
 
-  // 4. Package records: layers, objects, mesh clusters, parametric clusters.
+  // 4. Package records: layers, objects, mesh clusters, parametric clusters. Mesh clusters go
+  // brick by brick, then the merged levels (so each group's produced clusters stay contiguous);
+  // finished pages stream to a spill file in the work dir.
   clock.start("pack");
-  beginStage(progress, "pack", dag.clusters.size());
-  PackageStorage storage;
+  beginStage(progress, "pack", bricks.size() + 1);
+  // Snapping pass 1 to its fixpoint: a piece whose shared vertices another piece coarsened is
+  // solved again (rare; a re-read brick at most).
+  const auto fixpoint_start = Clock::now();
+  for (std::vector<uint32_t> stale = snapper.stalePieces(); !stale.empty();
+       stale = snapper.stalePieces()) {
+    for (uint32_t p : stale) {
+      if (p == upper_piece) {
+        snapper.solve(p, upper_snap, true);
+        continue;
+      }
+      std::unique_ptr<ClusterDag> loaded;
+      const ClusterDag& dag = resident[p] ? *resident[p] : *(loaded = loadBrickDag(cache, p));
+      snapper.solve(p, brickSnapPiece(dag, bricks[p]), resident[p] != nullptr);
+      ++report.bricks_resolved;
+    }
+  }
+  snap_in_pack += secondsSince(fixpoint_start);
   storage.origin = scene.origin;
   storage.input_hash = cache.runHash();
+  std::filesystem::create_directories(bricking.work_dir);
+  storage.spillPagesTo(bricking.work_dir / "pages.spill");
   for (const Layer& layer : scene.layers) storage.addLayer(layer);
   forEachObject(scene, [&](const BrickedObject& object) {
     ObjectInfo info;
@@ -161,8 +331,33 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
     info.color_rgba = object.color_rgba;
     storage.addObject(info, object.bounds_min, object.bounds_max);
   });
-  addDagToPackage(dag, storage);
-  dag = ClusterDag{};  // encoded now; release the geometry before the parametrics
+  report.shared_positions = snapper.sharedPositions();
+  DagPlacement placement = beginDagPlacement(storage);
+  placement.max_shift = snapper.maxShift();
+  placement.coarsened_vertices = snapper.coarsenedVertices();
+  // Snapping moves a vertex by up to half a cell of the coarsest grid: every lod sphere grows by
+  // that much (package_assembly.h).
+  placement.lod_slack =
+      static_cast<float>(quantizationErrorM(storage.position_step_m, placement.max_shift));
+  std::vector<uint32_t> shifts;
+  for (uint32_t b = 0; b < bricks.size(); ++b) {
+    throwIfCancelled(progress);
+    std::unique_ptr<ClusterDag> dag = resident[b] ? std::move(resident[b]) : loadBrickDag(cache, b);
+    BrickRecord& brick = bricks[b];
+    const auto snap_start = Clock::now();
+    const auto snapped = snapper.snap(b, brickSnapPiece(*dag, brick), shifts);
+    snap_in_pack += secondsSince(snap_start);
+    renumberBrick(*dag, brick);
+    addDagPieceToPackage(*dag, brick.first_cluster, brick.first_group, snapped, shifts, placement,
+                         storage);
+    updateProgress(progress, b + 1);
+  }
+  {
+    const auto snapped = snapper.snap(upper_piece, upper_snap, shifts);
+    addDagPieceToPackage(upper, uint32_t(total_clusters), uint32_t(total_groups), snapped, shifts,
+                         placement, storage);
+    upper = ClusterDag{};
+  }
   std::vector<ParametricItem> items;
   items.reserve(scene.parametric_count);
   forEachParametricBatch(scene, 4096, [&](std::span<const ParametricRecord> batch) {
@@ -176,8 +371,19 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   clock.start("write");
   beginStage(progress, "write package", 0);
   PackageWriteStats written = writePackage(storage, options.output);
+  storage = PackageStorage{};
   endStage(progress);
   clock.stop();
+  // Snapping ran inside "build bricks" and "pack": shown apart, the stages still sum to the run.
+  for (StageTime& stage : report.stages) {
+    if (stage.name == "build bricks") stage.seconds -= snap_in_build;
+    if (stage.name == "pack") stage.seconds -= snap_in_pack;
+  }
+  for (size_t i = 0; i < report.stages.size(); ++i)
+    if (report.stages[i].name == "pack") {
+      report.stages.insert(report.stages.begin() + i, {"snap", snap_in_build + snap_in_pack});
+      break;
+    }
   report.package_bytes = written.file_bytes;
   if (!options.keep_work_dir) removeWorkDir(bricking.work_dir);
   report.peak_rss_bytes = peakRssBytes();

@@ -7,6 +7,11 @@
 // `resume`, a run reuses what a killed run with the same arguments finished and writes a
 // byte-identical package; without it the work directory is cleared first. It is removed after a
 // successful run.
+//
+// Memory: one brick is built at a time; finished brick DAGs wait in the resume store (only their
+// roots, for the merge, stay in memory) and are re-read one at a time when packed; pages stream
+// to a spill file in the work directory. What still grows with the input is listed in
+// docs/preprocess.md ("Memory").
 #pragma once
 
 #include <cstdint>
@@ -45,6 +50,9 @@ struct PreprocessReport {
   bool bricking_reused = false;
   std::vector<uint64_t> triangles_per_level;
   uint64_t root_triangles = 0;
+  uint64_t merge_front_triangles = 0;  // all bricks' roots, held in memory for the merge
+  uint64_t shared_positions = 0;       // seam and root positions in the snapping table
+  uint32_t bricks_resolved = 0;        // brick snapping solved again (a re-read each)
   uint64_t clusters = 0;
   uint64_t parametric_clusters = 0;
   uint64_t package_bytes = 0;

@@ -52,11 +52,14 @@ Patch makePatch(int n, float size_m, glm::vec3 offset, uint32_t first_object, ui
 // Two LOD levels (4 clusters in group 0 simplified into 1 root cluster in group 1), two
 // parametric clusters (cylinders; an extrusion with a profile), 3 objects on 2 layers, pages small
 // enough that there are several.
-PackageStorage makeStorage() {
+// With `spill`, finished pages stream to that file (spillPagesTo) with `spill_options`.
+PackageStorage makeStorage(const std::filesystem::path& spill = {},
+                           const PackageWriteOptions& spill_options = {}) {
   PackageStorage s;
   s.origin = glm::dvec3(451234.5, 6781234.25, -12.0);
   s.input_hash = 0x1234abcd5678ef90ull;
   s.target_page_bytes = 1500;
+  if (!spill.empty()) s.spillPagesTo(spill, spill_options);
   s.addLayer({"piping", 0xff0000ffu});
   s.addLayer({"structure", 0xff00ff00u});
   ObjectInfo o;
@@ -267,6 +270,41 @@ TEST(Package, RoundTripOfEverySection) {
   // The view stays valid after a move.
   PackageView moved = std::move(raw_view);
   EXPECT_EQ(moved.objectName(2), "deck");
+}
+
+// Pages streamed to a spill file as they fill give the very bytes of pages kept in memory, with
+// and without zstd; the storage then keeps only the open page.
+TEST(Package, SpilledPagesGiveTheSameFile) {
+  const std::filesystem::path dir = test::scratchDir();
+  const PackageStorage in_memory = makeStorage();
+  ASSERT_GE(in_memory.pages.size(), 2u);  // at least one spilled, one open
+  PackageWriteOptions plain;
+  plain.zstd = false;
+  for (const PackageWriteOptions& options : {PackageWriteOptions{}, plain}) {
+    const PackageStorage spilled = makeStorage(dir / "pages.spill", options);
+    EXPECT_EQ(spilled.pages.size(), 1u);
+    EXPECT_EQ(spilled.pageCount(), in_memory.pages.size());
+    EXPECT_GT(spilled.spilledPageBytes(), 0u);
+    EXPECT_EQ(writeToString(spilled, dir / "spilled.twk", options),
+              writeToString(in_memory, dir / "memory.twk", options))
+        << "zstd " << options.zstd;
+    PackageView::open(dir / "spilled.twk", PackageView::Verify::All);
+  }
+  // The spill's options are the writer's: another codec would mix two layouts.
+  const PackageStorage spilled = makeStorage(dir / "pages.spill");
+  EXPECT_THROW(writePackage(spilled, dir / "mixed.twk", plain), std::invalid_argument);
+  EXPECT_FALSE(std::filesystem::exists(dir / "mixed.twk"));
+  // Spilling starts before the first page or not at all.
+  PackageStorage late = makeStorage();
+  EXPECT_THROW(late.spillPagesTo(dir / "late.spill"), std::logic_error);
+  // An unwritable spill path is an I/O error naming it.
+  PackageStorage nowhere;
+  try {
+    nowhere.spillPagesTo(dir / "absent" / "pages.spill");
+    ADD_FAILURE() << "no error for an unwritable spill file";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("pages.spill"), std::string::npos) << e.what();
+  }
 }
 
 TEST(Package, ParametricInstancesRoundTripWithConservativeBounds) {

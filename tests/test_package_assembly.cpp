@@ -16,15 +16,19 @@
 #include <unordered_map>
 
 #include "cluster_dag.h"
+#include "dag_merge.h"
 #include "obj_reader.h"
 #include "package_assembly.h"
 #include "package_view.h"
 #include "position_key.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
+#include "quantization_snap.h"
 #include "test_support.h"
 
 namespace {
+
+double defaultStepM() { return tw::pkg::kDefaultPositionStepM; }
 
 using tw::ClusterDag;
 using tw::PackageStorage;
@@ -270,6 +274,92 @@ TEST(PackageAssembly, RefusesObjectIdsOutsideTheObjectTable) {
   storage.addObject(tw::ObjectInfo{}, glm::vec3(0.0f), glm::vec3(1.0f));
   EXPECT_THROW(tw::addDagToPackage(dag, storage), std::invalid_argument);
   EXPECT_TRUE(storage.clusters.empty());
+}
+
+// Snapping piece by piece (two seam-locked halves, then their merged levels, as the preprocessor
+// streams them) gives exactly the whole-DAG snapping, and every distinct position decodes to one
+// point in every cluster that uses it (what keeps cuts closed across pieces).
+TEST(PackageAssembly, PiecewiseSnappingEqualsWholeDagSnapping) {
+  Model bunny = loadModel(tw::test::sharedDataDir() / "stanford-bunny.obj");
+  for (glm::vec3& p : bunny.positions) p *= 2000.0f;  // ~300 m: clusters of many shifts
+  float mid = 0.0f;
+  for (const glm::vec3& p : bunny.positions) mid += p.x / float(bunny.positions.size());
+  std::vector<uint32_t> half_indices[2], half_ids[2];
+  for (size_t t = 0; t < bunny.ids.size(); ++t) {
+    const uint32_t* v = &bunny.indices[3 * t];
+    float cx = (bunny.positions[v[0]].x + bunny.positions[v[1]].x + bunny.positions[v[2]].x) / 3;
+    int h = cx < mid ? 0 : 1;
+    half_indices[h].insert(half_indices[h].end(), v, v + 3);
+    half_ids[h].push_back(bunny.ids[t]);
+  }
+  tw::DagOptions brick_options;
+  brick_options.cluster_size = 128;
+  brick_options.lock_open_boundaries = true;
+  std::vector<ClusterDag> bricks;
+  for (int h = 0; h < 2; ++h)
+    bricks.push_back(tw::buildClusterDag({bunny.positions, half_indices[h], half_ids[h]},
+                                         brick_options));
+  tw::DagOptions merge_options;
+  merge_options.cluster_size = 128;
+
+  // Pieces: each brick (its roots exported), then the merged levels.
+  tw::QuantizationSnapper pieces(defaultStepM());
+  std::vector<std::vector<uint8_t>> exported(2);
+  std::vector<tw::DagCluster> roots;
+  for (int h = 0; h < 2; ++h) {
+    for (const tw::DagCluster& c : bricks[h].clusters) {
+      exported[h].push_back(c.parent_group == tw::kNoGroup);
+      if (exported[h].back()) roots.push_back(c);
+    }
+    pieces.solve(h, {bricks[h].clusters, exported[h], tw::SharedPositions::SeamsAndRoots});
+  }
+  tw::MergedRoots merged = tw::mergeBrickRoots(roots, merge_options);
+  std::vector<tw::DagCluster> upper(merged.dag.clusters.begin() + merged.front_count,
+                                    merged.dag.clusters.end());
+  ASSERT_FALSE(upper.empty());
+  pieces.solve(2, {upper, {}, tw::SharedPositions::All});
+  int rounds = 0;
+  for (auto stale = pieces.stalePieces(); !stale.empty(); stale = pieces.stalePieces()) {
+    ASSERT_LT(++rounds, 40);
+    for (uint32_t p : stale)
+      pieces.solve(p, p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All}
+                             : tw::SnapPiece{bricks[p].clusters, exported[p],
+                                             tw::SharedPositions::SeamsAndRoots});
+  }
+  std::vector<std::vector<glm::vec3>> piecewise;
+  std::vector<uint32_t> piecewise_shifts, shifts;
+  for (uint32_t p = 0; p < 3; ++p) {
+    tw::SnapPiece input = p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All}
+                                 : tw::SnapPiece{bricks[p].clusters, exported[p],
+                                                 tw::SharedPositions::SeamsAndRoots};
+    for (auto& snapped : pieces.snap(p, input, shifts)) piecewise.push_back(std::move(snapped));
+    piecewise_shifts.insert(piecewise_shifts.end(), shifts.begin(), shifts.end());
+  }
+
+  // The whole DAG at once.
+  ClusterDag whole = tw::mergeBrickDags(bricks, merge_options);
+  ASSERT_EQ(whole.clusters.size(), piecewise.size());
+  tw::QuantizationSnapper at_once(defaultStepM());
+  at_once.solve(0, {whole.clusters, {}, tw::SharedPositions::None});
+  std::vector<uint32_t> whole_shifts;
+  std::vector<std::vector<glm::vec3>> snapped = at_once.snap(0, {whole.clusters, {}, {}}, whole_shifts);
+  EXPECT_EQ(piecewise_shifts, whole_shifts);
+  EXPECT_EQ(piecewise, snapped);
+  EXPECT_EQ(pieces.maxShift(), at_once.maxShift());
+  EXPECT_EQ(pieces.coarsenedVertices(), at_once.coarsenedVertices());
+  EXPECT_GT(pieces.maxShift(), 0u) << "the test needs several quantization grids";
+  EXPECT_GT(pieces.sharedPositions(), 0u);
+
+  // One snapped point per distinct position, whichever cluster uses it.
+  std::unordered_map<tw::PositionKey, glm::vec3, tw::PositionHash> point;
+  size_t conflicts = 0;
+  for (size_t c = 0; c < whole.clusters.size(); ++c)
+    for (size_t v = 0; v < whole.clusters[c].positions.size(); ++v) {
+      auto [it, inserted] =
+          point.emplace(tw::positionKeyOf(whole.clusters[c].positions[v]), piecewise[c][v]);
+      conflicts += !inserted && it->second != piecewise[c][v];
+    }
+  EXPECT_EQ(conflicts, 0u);
 }
 
 // Random primitives of every type over a 100 m site, far from the world origin.

@@ -5,9 +5,14 @@
 
 #include <stdexcept>
 
+#include "brick_cache.h"
 #include "cluster_dag.h"
+#include "dag_merge.h"
 #include "dag_serialization.h"
+#include "package_assembly.h"
 #include "package_view.h"
+#include "package_writer.h"
+#include "parametric_clusters.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
 #include "tws_writer.h"
@@ -161,6 +166,87 @@ TEST(Preprocess, ResumeWithOtherOptionsStartsOver) {
   PreprocessReport report = runPreprocess(second);
   EXPECT_EQ(report.bricks_reused, 0u);
   EXPECT_FALSE(report.bricking_reused && report.bricks_reused > 0);
+}
+
+// The streamed assembly (brick DAGs re-read from the resume store one at a time, snapping solved
+// piece by piece, pages spilled to disk) gives the bytes the whole-DAG, in-memory assembly gives
+// from the same bricks: every brick merged with mergeBrickDags, packed with addDagToPackage, the
+// package written from memory.
+TEST(Preprocess, StreamedPackageEqualsTheInMemoryAssembly) {
+  fs::path dir = test::scratchDir();
+  fs::path input = writeScene(dir);
+  fs::path output = dir / "streamed.twk";
+  PreprocessOptions options = optionsFor(input, output);
+  options.memory_budget_bytes = 1u << 20;  // no brick DAG stays resident: all are re-read
+  options.keep_work_dir = true;
+  PreprocessReport report = runPreprocess(options);
+  ASSERT_GT(report.bricks, 3u);
+  const fs::path work = output.string() + ".work";
+  ASSERT_TRUE(fs::exists(work / "pages.spill"));
+
+  const PackageView view = PackageView::open(output, PackageView::Verify::All);
+  BrickCache cache(work, view.header().input_hash);
+  std::optional<BrickedScene> scene = loadBrickedScene(cache, work);
+  ASSERT_TRUE(scene.has_value());
+  std::vector<ClusterDag> bricks;
+  for (uint32_t b = 0; b < scene->bricks.size(); ++b) {
+    std::optional<std::vector<uint8_t>> blob = cache.load(b);
+    ASSERT_TRUE(blob.has_value()) << "brick " << b;
+    bricks.push_back(deserializeClusterDag(*blob));
+  }
+  DagOptions dag_options;
+  dag_options.cluster_size = options.cluster_size;
+  ClusterDag dag = mergeBrickDags(std::move(bricks), dag_options);
+  EXPECT_EQ(dag.clusters.size(), report.clusters);
+  EXPECT_EQ(dag.triangles_per_level, report.triangles_per_level);
+  EXPECT_EQ(dag.root_triangles, report.root_triangles);
+  EXPECT_GT(report.merge_front_triangles, 0u);
+  EXPECT_GT(report.shared_positions, 0u) << "bricks meet at seams";
+
+  PackageStorage storage;
+  storage.origin = scene->origin;
+  storage.input_hash = view.header().input_hash;
+  for (const Layer& layer : scene->layers) storage.addLayer(layer);
+  forEachObject(*scene, [&](const BrickedObject& object) {
+    ObjectInfo info;
+    info.id = object.source_id;
+    info.name = object.name;
+    info.layer = object.layer;
+    info.db_key = object.db_key;
+    info.color_rgba = object.color_rgba;
+    storage.addObject(info, object.bounds_min, object.bounds_max);
+  });
+  addDagToPackage(dag, storage);
+  std::vector<ParametricItem> items;
+  forEachParametricBatch(*scene, 4096, [&](std::span<const ParametricRecord> batch) {
+    for (const ParametricRecord& r : batch) items.push_back({r.object, r.primitive, r.transform});
+  });
+  addParametricClusters(items, clusterPrimitives(items, storage.origin), storage);
+  const fs::path in_memory = dir / "in_memory.twk";
+  writePackage(storage, in_memory);
+  EXPECT_GT(storage.pages.size(), 1u);
+  EXPECT_EQ(test::readFile(output), test::readFile(in_memory));
+  removeWorkDir(work);
+}
+
+// Whether brick DAGs stay resident (large budget) or are re-read from the resume store (tiny
+// budget) changes nothing in the package; two runs give the same bytes; the work directory and
+// its page spill file are gone after success.
+TEST(Preprocess, ResidencyAndRepeatedRunsGiveTheSameBytes) {
+  fs::path dir = test::scratchDir();
+  fs::path input = writeScene(dir);
+  std::string reference;
+  for (uint64_t budget : {uint64_t(1) << 20, uint64_t(4) << 30, uint64_t(1) << 20}) {
+    fs::path output = dir / ("budget-" + std::to_string(budget) + ".twk");
+    PreprocessOptions options = optionsFor(input, output);
+    options.memory_budget_bytes = budget;
+    runPreprocess(options);
+    EXPECT_FALSE(fs::exists(output.string() + ".work")) << "work directory left behind";
+    EXPECT_FALSE(fs::exists(fs::path(output.string() + ".work") / "pages.spill"));
+    std::string bytes = test::readFile(output);
+    if (reference.empty()) reference = bytes;
+    EXPECT_EQ(bytes, reference) << "budget " << budget;
+  }
 }
 
 // The resume store's DAG blobs: exact round trip, and damage is an error, never a crash.
