@@ -14,6 +14,7 @@
 
 #include "clusterize.h"
 #include "edge_counts.h"
+#include "far_proxy.h"
 
 namespace tw {
 
@@ -143,22 +144,39 @@ struct LevelContext {
   const std::vector<uint8_t>& open_vertex;         // on a locked open edge (lock_open_boundaries)
   const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
   const DagOptions& options;
+  // false: a group that wants a far proxy (options.allow_proxy) only says so (GroupOutcome::
+  // proxy_wanted) and keeps its best result without one. See the level loop.
+  bool build_proxies = true;
 };
 
 struct GroupOutcome {
+  // Vertices the group created (far proxy). The clusters refer to new vertex j as
+  // positions.size() + j, positions being the level's; the caller renumbers them when it appends.
+  std::vector<glm::vec3> new_positions;
   std::vector<WorkCluster> clusters;
   float error = 0.0f;  // absolute simplification error, before taking the children's into account
   GroupMethod method = GroupMethod::PassThrough;
   uint64_t triangles = 0;
   bool locked_rejected = false;
   bool sloppy_rejected = false;
+  bool proxy_rejected = false;
+  bool proxy_skipped = false;  // dropping was sure to win: no proxy built
+  bool proxy_wanted = false;   // would build a proxy, but ctx.build_proxies was false
+  // With a proxy, the group could come down to no fewer than this many triangles (the border
+  // part plus one): the level loop's optimistic estimate.
+  uint64_t proxy_floor_triangles = 0;
 };
 
+// A far proxy's voxel comes out at least this fraction of predictFarProxyVoxel's (one retry
+// refines by at most 0.7x), and its measured error is at least about iso_voxels voxels.
+constexpr float kProxyVoxelFloor = 0.7f;
+
 struct Candidate {
-  std::vector<uint32_t> tris;  // local vertex indices
+  std::vector<uint32_t> tris;  // local vertex indices; vcount + j is extra[j]
   std::vector<uint32_t> ids;
   float error = 0.0f;
   GroupMethod method = GroupMethod::PassThrough;
+  std::vector<glm::vec3> extra;  // new vertices (far proxy)
 };
 
 void append(std::vector<uint32_t>& to, const std::vector<uint32_t>& from) {
@@ -249,7 +267,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   const size_t n = gids.size();
   const size_t limit = static_cast<size_t>(options.min_shrink_ratio * double(n));
   const size_t half_indices = (n / 2) * 3;
-  Candidate best{ltris, gids, 0.0f, GroupMethod::PassThrough};
+  Candidate best{ltris, gids, 0.0f, GroupMethod::PassThrough, {}};
   auto consider = [&](Candidate&& c) {
     if (!c.tris.empty() && c.tris.size() < best.tris.size()) best = std::move(c);
   };
@@ -264,7 +282,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   if (count < ltris.size()) {
     if (borderPreserved(in, shared, out, vcount)) {
       auto ids = triangleObjectIds(out, vertex_ids);
-      consider({std::move(out), std::move(ids), err * scale, GroupMethod::Locked});
+      consider({std::move(out), std::move(ids), err * scale, GroupMethod::Locked, {}});
     } else {
       outcome.locked_rejected = true;
     }
@@ -335,7 +353,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
         for (uint32_t& v : rf) v = f2l[v];
         const float f_scale = meshopt_simplifyScale(&fpos[0].x, fpos.size(), stride);
         if (borderPreserved(in, no_shared, rf, vcount)) {
-          Candidate c{rb, rb_ids, std::max(err_b, err_f * f_scale), GroupMethod::Sloppy};
+          Candidate c{rb, rb_ids, std::max(err_b, err_f * f_scale), GroupMethod::Sloppy, {}};
           append(c.tris, rf);
           append(c.ids, triangleObjectIds(rf, vertex_ids));
           consider(std::move(c));
@@ -344,8 +362,12 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
         }
       }
 
-      if (best.tris.size() / 3 > limit && options.allow_drop) {
-        // Drop whole free components, smallest first; a vanished part's error is its size.
+      // Dropping whole free components, smallest first (a vanished part's error is its size):
+      // the last resort, and the far proxy's rival. Built first, as it is cheap and tells
+      // whether a proxy is worth its cost.
+      const bool short_of_target = best.tris.size() / 3 > limit;
+      Candidate drop{{}, {}, 0.0f, GroupMethod::Dropped, {}};
+      if (short_of_target && options.allow_drop) {
         struct Component {
           float diagonal;
           uint32_t first_triangle;
@@ -384,13 +406,88 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
           kept -= parts[p].triangles;
           dropped_error = std::max(dropped_error, parts[p].diagonal);
         }
-        Candidate c{rb, rb_ids, std::max(err_b, dropped_error), GroupMethod::Dropped};
+        drop = Candidate{rb, rb_ids, std::max(err_b, dropped_error), GroupMethod::Dropped, {}};
         for (size_t t = 0; t < nf; ++t) {
           if (dropped[components.find(ftris[3 * t])]) continue;
-          c.tris.insert(c.tris.end(), ftris.begin() + 3 * t, ftris.begin() + 3 * t + 3);
-          c.ids.push_back(fids[t]);
+          drop.tris.insert(drop.tris.end(), ftris.begin() + 3 * t, ftris.begin() + 3 * t + 3);
+          drop.ids.push_back(fids[t]);
         }
-        consider(std::move(c));
+      }
+      const bool drop_fits = !drop.tris.empty() && drop.tris.size() / 3 <= limit;
+
+      // Far proxy: many small free parts as one closed shell, when sloppy fell short on them.
+      // (Tried also against an accepted sloppy result, it never won on error in the tests:
+      // sloppy's error is meshopt's estimate, the proxy's a measured bound; so it is not paid
+      // for.) When the best result already holds no more than target_f free triangles, the
+      // border part is what keeps the group long, which a proxy cannot fix: on the 10M plant
+      // such proxies were 63% of those built and 92% of them were thrown away.
+      const bool free_part_short = best.tris.size() / 3 > nb + target_f;
+      if (options.allow_proxy && short_of_target && free_part_short) {
+        uint32_t free_components = 0;
+        double free_area = 0.0;
+        glm::vec3 free_lo(INFINITY), free_hi(-INFINITY);
+        {
+          std::vector<uint8_t> seen(vcount, 0);
+          for (size_t i = 0; i < ftris.size(); i += 3) {
+            const uint32_t root = components.find(ftris[i]);
+            free_components += seen[root] == 0;
+            seen[root] = 1;
+            const glm::vec3 &a = lpos[ftris[i]], &b = lpos[ftris[i + 1]], &c = lpos[ftris[i + 2]];
+            free_area += 0.5 * double(glm::length(glm::cross(b - a, c - a)));
+            free_lo = glm::min(free_lo, glm::min(a, glm::min(b, c)));
+            free_hi = glm::max(free_hi, glm::max(a, glm::max(b, c)));
+          }
+        }
+        FarProxyOptions po;
+        po.target_triangles = uint32_t(std::max<size_t>(target_f, 1));
+        po.min_fill = 0.0f;
+        po.band_margin_voxels = 1.0f;
+        // A proxy's error is at least about its iso offset, and its voxel comes out at least
+        // 0.7x the predicted one: when dropping already reaches the target with proxy_error_slack
+        // times less than that, dropping wins below anyway, so the proxy is not built.
+        const glm::vec3 free_extent = free_hi - free_lo;
+        const float predicted_voxel = predictFarProxyVoxel(
+            free_area, po.target_triangles,
+            std::max({free_extent.x, free_extent.y, free_extent.z}), po);
+        const float proxy_error_floor =
+            std::max(err_b, kProxyVoxelFloor * po.iso_voxels * predicted_voxel);
+        const bool drop_wins_anyway =
+            options.allow_drop && drop_fits &&
+            drop.error * options.proxy_error_slack < proxy_error_floor;
+        if (free_components >= options.proxy_min_components && drop_wins_anyway) {
+          outcome.proxy_skipped = true;
+        } else if (free_components >= options.proxy_min_components && !ctx.build_proxies) {
+          outcome.proxy_wanted = true;
+          outcome.proxy_floor_triangles = nb + 1;
+        } else if (free_components >= options.proxy_min_components) {
+          FarProxy proxy = buildFarProxy({lpos, ftris, fids}, po);
+          const size_t total = nb + proxy.triangleCount();
+          std::vector<uint32_t> rp(proxy.indices);
+          for (uint32_t& v : rp) v += uint32_t(vcount);
+          if (proxy.triangleCount() == 0 || total >= best.tris.size() / 3) {
+            // no gain: keep what we have
+          } else if (!borderPreserved(in, no_shared, rp, vcount + proxy.positions.size())) {
+            outcome.proxy_rejected = true;  // a proxy shell is closed: this is only a guard
+          } else {
+            Candidate c{rb, rb_ids, std::max(err_b, proxy.part_error), GroupMethod::Proxy,
+                        std::move(proxy.positions)};
+            append(c.tris, rp);
+            append(c.ids, proxy.triangle_object_ids);
+            best = std::move(c);
+          }
+        }
+      }
+
+      // Both count a part that disappears (dropped, or hidden in a shell) as its size, but the
+      // proxy keeps dense areas closed where dropping opens holes the error does not see; so
+      // dropping replaces a proxy only with an error proxy_error_slack times lower.
+      if (!drop.tris.empty()) {
+        const bool proxy_fits =
+            best.method == GroupMethod::Proxy && best.tris.size() / 3 <= limit;
+        if (!proxy_fits)
+          consider(std::move(drop));
+        else if (drop_fits && drop.error * options.proxy_error_slack < best.error)
+          best = std::move(drop);
       }
     }
   }
@@ -399,6 +496,12 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   outcome.error = best.error;
   outcome.method = best.method;
   outcome.triangles = best.tris.size() / 3;
+  lpos.insert(lpos.end(), best.extra.begin(), best.extra.end());
+  const uint32_t first_new = uint32_t(ctx.positions.size());
+  auto toGlobal = [&](uint32_t local) {
+    return local < vcount ? l2g[local] : first_new + (local - uint32_t(vcount));
+  };
+  outcome.new_positions = std::move(best.extra);
   TriangleClusters split = clusterizeTriangles(lpos, best.tris, options.cluster_size);
   outcome.clusters.resize(split.clusterCount());
   for (size_t c = 0; c < split.clusterCount(); ++c) {
@@ -408,7 +511,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     wc.ids.reserve(last - first);
     for (uint32_t i = first; i < last; ++i) {
       uint32_t t = split.triangles[i];
-      for (int k = 0; k < 3; ++k) wc.tris.push_back(l2g[best.tris[3 * t + k]]);
+      for (int k = 0; k < 3; ++k) wc.tris.push_back(toGlobal(best.tris[3 * t + k]));
       wc.ids.push_back(best.ids[t]);
     }
   }
@@ -653,7 +756,8 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     for (size_t i = 0; i < keys.size();) {
       size_t j = i + 1;
       while (j < keys.size() && keys[j] == keys[i]) ++j;
-      if (j - i == 1) {
+      const uint32_t a = uint32_t(keys[i] >> 32), b = uint32_t(keys[i]);
+      if (j - i == 1 && (!options.is_seam_edge || options.is_seam_edge(positions[a], positions[b]))) {
         open_edges.push_back(keys[i]);
         open_vertex[uint32_t(keys[i] >> 32)] = open_vertex[uint32_t(keys[i])] = 1;
       }
@@ -661,9 +765,16 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     }
   }
 
+  // Far proxies create vertices: they are appended to a copy of the positions, made only when
+  // the first proxy is accepted (most models never pay for it).
+  const std::vector<glm::vec3>* all_positions = &positions;
+  std::vector<glm::vec3> grown_positions;
   std::vector<uint32_t> vertex_owner(positions.size());
   std::vector<uint32_t> slot(positions.size(), kUnowned);
   while (current_work.size() > 1) {
+    // Fixed for the level: the groups number new vertices from its size.
+    const std::vector<glm::vec3>& level_positions = *all_positions;
+    const uint32_t level_vertex_count = uint32_t(level_positions.size());
     uint64_t level_triangles = 0;
     uint32_t front_level = 0;
     for (size_t c = 0; c < current_work.size(); ++c) {
@@ -681,7 +792,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     for (uint64_t group_size = options.group_size;; group_size *= 2) {
       groups = partitionClusters(current_work, centers,
                                  uint32_t(std::min<uint64_t>(group_size, current_work.size())),
-                                 positions.size());
+                                 level_positions.size());
       // Which vertices and edges are shared between groups: those are the locked borders.
       // Only the level's own vertices are ever read: reset those, not the whole model's.
       for (const WorkCluster& wc : current_work)
@@ -716,13 +827,42 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         i = j;
       }
 
-      LevelContext ctx{positions, vertex_owner, shared_edges, open_vertex, open_edges, options};
+      // Far proxies cost far more than the rest of a group, and a level attempt that does not
+      // shrink enough is thrown away (retried with larger groups). So every group runs first
+      // without them; only when the attempt could still shrink enough if every group that wants
+      // a proxy came down to its floor (or when it cannot be retried) do those groups run again
+      // with one. The outcome is the same as building them all, at a fraction of the cost (on
+      // the 10M plant 64% of the proxies were built in attempts that were retried).
+      LevelContext ctx{level_positions, vertex_owner, shared_edges, open_vertex, open_edges,
+                       options, !options.allow_proxy};
       outcomes.assign(groups.size(), GroupOutcome{});
       tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 1),
                         [&](const tbb::blocked_range<size_t>& range) {
                           for (size_t g = range.begin(); g != range.end(); ++g)
                             outcomes[g] = processGroup(ctx, current_work, groups[g]);
                         });
+      if (options.allow_proxy) {
+        std::vector<uint32_t> wanting;
+        uint64_t optimistic = 0;
+        for (uint32_t g = 0; g < groups.size(); ++g) {
+          const GroupOutcome& o = outcomes[g];
+          if (o.proxy_wanted) wanting.push_back(g);
+          optimistic += o.proxy_wanted ? std::min(o.triangles, o.proxy_floor_triangles)
+                                       : o.triangles;
+        }
+        const bool could_shrink =
+            optimistic < level_triangles &&
+            double(optimistic) <= options.min_shrink_ratio * double(level_triangles);
+        if (!wanting.empty() && (could_shrink || groups.size() == 1)) {
+          ctx.build_proxies = true;
+          tbb::parallel_for(tbb::blocked_range<size_t>(0, wanting.size(), 1),
+                            [&](const tbb::blocked_range<size_t>& range) {
+                              for (size_t i = range.begin(); i != range.end(); ++i)
+                                outcomes[wanting[i]] =
+                                    processGroup(ctx, current_work, groups[wanting[i]]);
+                            });
+        }
+      }
       new_triangles = 0;
       for (const GroupOutcome& o : outcomes) new_triangles += o.triangles;
       if (new_triangles < level_triangles &&
@@ -761,9 +901,25 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       if (!(error > max_child_error)) error = std::nextafter(max_child_error, INFINITY);
       group.error = error;
 
+      if (!o.new_positions.empty()) {
+        // Renumber the group's new vertices to where they land in the grown positions.
+        if (all_positions != &grown_positions) {
+          grown_positions = positions;
+          all_positions = &grown_positions;
+        }
+        const uint32_t shift = uint32_t(grown_positions.size()) - level_vertex_count;
+        for (WorkCluster& wc : o.clusters)
+          for (uint32_t& v : wc.tris)
+            if (v >= level_vertex_count) v += shift;
+        grown_positions.insert(grown_positions.end(), o.new_positions.begin(),
+                               o.new_positions.end());
+        vertex_owner.resize(grown_positions.size());
+        slot.resize(grown_positions.size(), kUnowned);
+        if (!open_vertex.empty()) open_vertex.resize(grown_positions.size(), 0);
+      }
       std::vector<DagCluster> made;
       for (WorkCluster& wc : o.clusters) {
-        made.push_back(makeCluster(positions, wc.tris, wc.ids, slot));
+        made.push_back(makeCluster(*all_positions, wc.tris, wc.ids, slot));
         spheres.push_back({made.back().sphere_center, made.back().sphere_radius});
       }
       Sphere bound = enclose(spheres);
@@ -793,7 +949,10 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         case GroupMethod::Sloppy: ++dag.stats.groups_sloppy; break;
         case GroupMethod::Dropped: ++dag.stats.groups_dropped; break;
         case GroupMethod::PassThrough: ++dag.stats.groups_pass_through; break;
+        case GroupMethod::Proxy: ++dag.stats.groups_proxy; break;
       }
+      dag.stats.proxy_results_rejected += o.proxy_rejected;
+      dag.stats.proxies_skipped += o.proxy_skipped;
       dag.stats.locked_results_rejected += o.locked_rejected;
       dag.stats.sloppy_results_rejected += o.sloppy_rejected;
       dag.groups.push_back(std::move(group));

@@ -16,8 +16,12 @@
 //     components (connected components that share no vertex with another group, so nothing
 //     outside the group can crack against them): first meshopt_simplifySloppy on them (given only
 //     their vertices, so its output cannot reach the border part), then, if that is rejected or
-//     not enough, dropping whole free components smallest first (error: the dropped part's
-//     bounding-box diagonal). The rest of the group keeps the locked result.
+//     not enough and there are many free components, an OpenVDB far proxy of them (far_proxy.h:
+//     one closed shell around the aggregate, new vertices; error: its measured two-sided distance
+//     bound, each part capped at its size), then dropping whole free components smallest first
+//     (error: the dropped part's bounding-box diagonal) if still not enough, or if it reaches the
+//     target with proxy_error_slack times less error than the proxy. The rest of the group keeps
+//     the locked result.
 //  4. Every candidate result is checked before use: each edge the group shares with another group
 //     must keep its exact triangle count, and no edge may become a boundary edge (used once)
 //     unless it already was one. A rejected candidate falls back to the next; the last resort
@@ -44,7 +48,8 @@
 //
 // Object ids: a simplified triangle takes the majority id of its three vertices, where a vertex's
 // id is the most frequent id among the group's input triangles that use it (ties: smaller id).
-// Triangles kept unchanged (pass-through, kept free components) keep their own id.
+// Triangles kept unchanged (pass-through, kept free components) keep their own id. Far-proxy
+// triangles take the id of the source triangle nearest their centroid.
 //
 // Limitations: (a) components touching another group at a single vertex (no shared edge, e.g. two
 // cone tips welded together) are not locked there; the vertex may move, leaving a gap no edge
@@ -57,6 +62,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <span>
 #include <vector>
@@ -81,6 +87,19 @@ struct DagOptions {
   float max_relative_error = 1.0f;   // meshopt target_error, relative to a group's extent
   bool allow_sloppy = true;          // meshopt_simplifySloppy on free components
   bool allow_drop = true;            // drop whole free components, smallest first
+  // OpenVDB far proxy (far_proxy.h) of a group's free components when there are at least
+  // proxy_min_components of them, sloppy fell short of min_shrink_ratio and the free part (not
+  // the locked border part) is what keeps the group long. Not built when dropping reaches the
+  // target with an error proxy_error_slack times below what a proxy's could be, nor in a level
+  // attempt that could not shrink enough even with it (that attempt is redone with larger
+  // groups; the DAG is the same as building them all). Used when it leaves
+  // fewer triangles than the best result so far, unless dropping also reaches the target with
+  // an error proxy_error_slack times lower (dropping opens holes in dense areas that its error,
+  // the largest dropped part's size, does not measure; a proxy that merges whole structures
+  // into one shell has a large error and loses).
+  bool allow_proxy = true;
+  uint32_t proxy_min_components = 8;
+  float proxy_error_slack = 4.0f;
   uint32_t max_levels = 64;
   // Brick seams: every edge used by exactly one triangle of the input (after welding) keeps its
   // exact triangle count at every level, and a component holding such an edge's vertex is never
@@ -89,6 +108,11 @@ struct DagOptions {
   // isolated model gains nothing from it and CAD sheets could no longer be dropped); the brick
   // builds of the preprocessor turn it on.
   bool lock_open_boundaries = false;
+  // With lock_open_boundaries: when set, only the open edges it accepts (given their two end
+  // positions) are locked; the input's other open edges stay free like in an unlocked build. The
+  // preprocessor passes the true brick seams (brick_seams.h), so CAD parts with open edges of
+  // their own (uncapped pipes, sheets) still simplify and drop.
+  std::function<bool(const glm::vec3&, const glm::vec3&)> is_seam_edge;
 };
 
 constexpr uint32_t kNoGroup = std::numeric_limits<uint32_t>::max();
@@ -123,6 +147,7 @@ enum class GroupMethod : uint8_t {
   Sloppy = 1,       // locked on the border part, meshopt_simplifySloppy on free components
   Dropped = 2,      // locked on the border part, smallest free components removed
   PassThrough = 3,  // nothing acceptable: the group's triangles unchanged
+  Proxy = 4,        // locked on the border part, OpenVDB far proxy of the free components
 };
 
 struct DagGroup {
@@ -145,6 +170,9 @@ struct DagBuildStats {
   uint32_t groups_pass_through = 0;
   uint32_t locked_results_rejected = 0;  // locked simplify output failed the border check
   uint32_t sloppy_results_rejected = 0;  // sloppy output failed the boundary check
+  uint32_t groups_proxy = 0;
+  uint32_t proxy_results_rejected = 0;   // proxy output failed the boundary check
+  uint32_t proxies_skipped = 0;  // not built: dropping reached the target with far less error
   uint32_t level_retries = 0;            // levels redone with larger groups
   uint32_t levels_below_shrink = 0;      // levels accepted although ratio > min_shrink_ratio
   bool root_within_limit = true;         // root level holds <= max_root_triangles

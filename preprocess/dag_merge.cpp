@@ -18,6 +18,9 @@ void addStats(DagBuildStats& to, const DagBuildStats& from) {
   to.groups_sloppy += from.groups_sloppy;
   to.groups_dropped += from.groups_dropped;
   to.groups_pass_through += from.groups_pass_through;
+  to.groups_proxy += from.groups_proxy;
+  to.proxy_results_rejected += from.proxy_results_rejected;
+  to.proxies_skipped += from.proxies_skipped;
   to.locked_results_rejected += from.locked_results_rejected;
   to.sloppy_results_rejected += from.sloppy_results_rejected;
   to.level_retries += from.level_retries;

@@ -11,6 +11,7 @@
 #include <tbb/global_control.h>
 
 #include "brick_cache.h"
+#include "brick_seams.h"
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
@@ -27,7 +28,7 @@ using Clock = std::chrono::steady_clock;
 
 // Bumped whenever the preprocessor's output changes for the same inputs and options, so that a
 // resume never mixes bricks built by two versions.
-constexpr uint32_t kPreprocessorRevision = 1;
+constexpr uint32_t kPreprocessorRevision = 2;
 
 uint64_t peakRssBytes() {
   rusage usage{};
@@ -187,10 +188,21 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   // goes to the resume store; memory keeps its roots (for the merge) and its quantization shifts
   // (snapping pass 1, solved now while it is in memory). The last brick's DAG stays too when it
   // is within budget / 8, so a one-brick model is never read back.
+  // Only the true seams are locked: the model's own open edges (uncapped pipes, sheets) stay free
+  // to simplify and drop, as in a one-brick build, which needs no locking at all.
+  DagOptions brick_options = dag_options;
+  BrickSeams seams;
+  if (scene.bricks.size() > 1) {
+    clock.start("seams");
+    seams = BrickSeams::find(scene, progress);
+    report.seam_edges = seams.size();
+    brick_options.lock_open_boundaries = true;
+    brick_options.is_seam_edge = [&seams](const glm::vec3& a, const glm::vec3& b) {
+      return seams.contains(a, b);
+    };
+  }
   clock.start("build bricks");
   beginStage(progress, "build bricks", scene.bricks.size());
-  DagOptions brick_options = dag_options;
-  brick_options.lock_open_boundaries = true;
   PackageStorage storage;
   QuantizationSnapper snapper(storage.position_step_m);
   const uint64_t resident_limit = options.memory_budget_bytes / 8;

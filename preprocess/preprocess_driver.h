@@ -47,6 +47,7 @@ struct PreprocessReport {
   uint64_t objects = 0;
   uint32_t bricks = 0;
   uint32_t bricks_reused = 0;     // taken from the resume store
+  uint64_t seam_edges = 0;        // edges open in two bricks, locked in both brick DAGs
   bool bricking_reused = false;
   std::vector<uint64_t> triangles_per_level;
   uint64_t root_triangles = 0;

@@ -1,7 +1,9 @@
 // Tests for clusterize and the LOD DAG: cut consistency (no boundary edge the input did not have,
 // at many thresholds), monotone errors and bounds, shrinking levels, object ids, the CAD fallback
-// (thousands of disconnected boxes), determinism, and the real bunny and KiCad models.
+// (thousands of disconnected boxes; OpenVDB far proxies of many small parts), determinism, and the
+// real bunny and KiCad models.
 #include <gtest/gtest.h>
+#include <tbb/global_control.h>
 
 #include <algorithm>
 #include <chrono>
@@ -100,6 +102,40 @@ Mesh scatteredBoxes(uint32_t count, uint32_t seed) {
                                            {hi.x, hi.y, hi.z}, {lo.x, hi.y, hi.z}});
     for (uint32_t f : kFaces) m.indices.push_back(base + f);
     for (int t = 0; t < 12; ++t) m.ids.push_back(1000 + b);
+  }
+  return m;
+}
+
+// `count` small open parts (short pipe stubs: open tubes of 16 segments, 32 triangles, every
+// vertex on an open rim), each its own object, packed in `clumps` dense clumps. Locked
+// simplification cannot touch them.
+Mesh scatteredPipeStubs(uint32_t count, uint32_t clumps, uint32_t seed) {
+  Mesh m;
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> where(0.0f, 40.0f), spread(-1.0f, 1.0f),
+      radius(0.08f, 0.15f), length(0.2f, 0.5f);
+  std::vector<glm::vec3> centers(clumps);
+  for (glm::vec3& c : centers) c = {where(rng), where(rng), where(rng) * 0.25f};
+  constexpr uint32_t kSegments = 16;
+  for (uint32_t b = 0; b < count; ++b) {
+    const glm::vec3 o = centers[b % clumps] + glm::vec3(spread(rng), spread(rng), spread(rng));
+    const float r = radius(rng), l = length(rng);
+    const int axis = int(b % 3);
+    const uint32_t base = uint32_t(m.positions.size());
+    for (uint32_t end = 0; end < 2; ++end)
+      for (uint32_t s = 0; s < kSegments; ++s) {
+        const float a = 6.2831853f * float(s) / float(kSegments);
+        glm::vec3 p(r * std::cos(a), r * std::sin(a), float(end) * l);
+        if (axis == 1) p = {p.z, p.x, p.y};
+        if (axis == 2) p = {p.y, p.z, p.x};
+        m.positions.push_back(o + p);
+      }
+    for (uint32_t s = 0; s < kSegments; ++s) {
+      const uint32_t a = base + s, b2 = base + (s + 1) % kSegments, c = a + kSegments,
+                     d = b2 + kSegments;
+      m.indices.insert(m.indices.end(), {a, b2, d, a, d, c});
+      m.ids.insert(m.ids.end(), {5000 + b, 5000 + b});
+    }
   }
   return m;
 }
@@ -317,14 +353,16 @@ void reportDag(const char* name, const ClusterDag& dag, double seconds) {
   for (size_t l = 0; l < dag.levelCount(); ++l)
     levels += (l ? " " : "") + std::to_string(dag.triangles_per_level[l]) + "/" +
               std::to_string(dag.clusters_per_level[l]);
-  std::string build = seconds < 0.0 ? "" : "build " + std::to_string(seconds) + " s; ";
+  std::string build;
+  if (seconds >= 0.0) build.append("build ").append(std::to_string(seconds)).append(" s; ");
   std::printf("[ dag ] %s: %u levels, triangles/clusters per level: %s; %sgroups "
-              "locked %u sloppy %u dropped %u pass-through %u; rejected locked %u sloppy %u; "
-              "retries %u\n",
+              "locked %u sloppy %u proxy %u dropped %u pass-through %u; rejected locked %u "
+              "sloppy %u proxy %u; retries %u; root %llu\n",
               name, dag.levelCount(), levels.c_str(), build.c_str(), dag.stats.groups_locked,
-              dag.stats.groups_sloppy, dag.stats.groups_dropped, dag.stats.groups_pass_through,
-              dag.stats.locked_results_rejected, dag.stats.sloppy_results_rejected,
-              dag.stats.level_retries);
+              dag.stats.groups_sloppy, dag.stats.groups_proxy, dag.stats.groups_dropped,
+              dag.stats.groups_pass_through, dag.stats.locked_results_rejected,
+              dag.stats.sloppy_results_rejected, dag.stats.proxy_results_rejected,
+              dag.stats.level_retries, static_cast<unsigned long long>(dag.root_triangles));
 }
 
 TEST(Clusterize, BalancedCompactClusters) {
@@ -441,6 +479,7 @@ TEST(ClusterDag, SloppyFallbackAloneKeepsBoxesClosed) {
   DagOptions options;
   options.cluster_size = 256;
   options.allow_drop = false;  // exercise meshopt_simplifySloppy and its boundary check
+  options.allow_proxy = false;
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
   reportDag("2000 boxes, no drop", dag, -1.0);
   EXPECT_GT(dag.stats.groups_sloppy, 0u);
@@ -455,6 +494,7 @@ TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
   DagOptions options;
   options.cluster_size = 256;
   options.allow_sloppy = false;  // exercise dropping whole free components
+  options.allow_proxy = false;
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
   reportDag("2000 boxes, no sloppy", dag, -1.0);
   EXPECT_GT(dag.stats.groups_dropped, 0u);
@@ -464,6 +504,82 @@ TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
   for (const tw::DagGroup& g : dag.groups) {
     if (g.method == tw::GroupMethod::Dropped) {
       EXPECT_GT(g.error, 0.05f);
+    }
+  }
+}
+
+// Many tiny separate parts (CAD fasteners): without far proxies the chain drops parts; with them,
+// groups of many free parts become closed OpenVDB shells instead of losing whole parts, and every
+// cut check still holds.
+TEST(ClusterDag, FarProxiesReplaceDroppingForManySmallParts) {
+  Mesh m = scatteredPipeStubs(800, 20, 17);  // 25600 triangles
+  DagOptions options;
+  options.allow_proxy = false;
+  ClusterDag old_chain = tw::buildClusterDag(m.input(), options);
+  reportDag("800 pipe stubs, no proxy", old_chain, -1.0);
+  options.allow_proxy = true;
+  auto start = std::chrono::steady_clock::now();
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  reportDag("800 pipe stubs, proxy", dag, seconds);
+  EXPECT_GT(old_chain.stats.groups_dropped, 0u);
+  EXPECT_GT(dag.stats.groups_proxy, 0u);
+  EXPECT_LT(dag.stats.groups_dropped, old_chain.stats.groups_dropped);
+  expectWellFormed(dag, options, m.triangles());
+  EXPECT_EQ(dag.clusters_per_level.back(), 1u);
+  expectCrackFreeCuts(dag, m);
+  // Ids valid at every level; proxy groups keep many objects, not one.
+  std::set<uint32_t> input_ids(m.ids.begin(), m.ids.end());
+  for (const DagCluster& c : dag.clusters)
+    for (uint32_t id : c.triangle_object_ids) ASSERT_TRUE(input_ids.count(id));
+  size_t proxy_objects = 0;
+  for (const tw::DagGroup& g : dag.groups) {
+    if (g.method != tw::GroupMethod::Proxy) continue;
+    std::set<uint32_t> ids;
+    for (uint32_t c : g.clusters)
+      ids.insert(dag.clusters[c].triangle_object_ids.begin(),
+                 dag.clusters[c].triangle_object_ids.end());
+    proxy_objects = std::max(proxy_objects, ids.size());
+  }
+  EXPECT_GE(proxy_objects, 8u);
+  // Objects kept at the root, for the report (proxies merge clumps; dropping keeps whole parts).
+  auto rootObjects = [](const ClusterDag& d) {
+    std::set<uint32_t> ids;
+    for (const DagCluster& c : d.clusters)
+      if (c.parent_group == tw::kNoGroup)
+        ids.insert(c.triangle_object_ids.begin(), c.triangle_object_ids.end());
+    return ids.size();
+  };
+  std::printf("[ dag ] objects at the root: %zu with proxies, %zu without\n", rootObjects(dag),
+              rootObjects(old_chain));
+  // Deterministic with proxies too.
+  ClusterDag again = tw::buildClusterDag(m.input(), options);
+  ASSERT_EQ(again.clusters.size(), dag.clusters.size());
+  for (size_t c = 0; c < dag.clusters.size(); ++c) {
+    ASSERT_EQ(again.clusters[c].positions, dag.clusters[c].positions);
+    ASSERT_EQ(again.clusters[c].indices, dag.clusters[c].indices);
+    ASSERT_EQ(again.clusters[c].triangle_object_ids, dag.clusters[c].triangle_object_ids);
+    ASSERT_EQ(again.clusters[c].error, dag.clusters[c].error);
+  }
+  // And across thread counts: proxies are built in a second pass over the groups that want one
+  // (see the level loop), which must not depend on scheduling.
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    ClusterDag serial = tw::buildClusterDag(m.input(), options);
+    EXPECT_EQ(serial.stats.groups_proxy, dag.stats.groups_proxy);
+    EXPECT_EQ(serial.stats.proxies_skipped, dag.stats.proxies_skipped);
+    ASSERT_EQ(serial.clusters.size(), dag.clusters.size());
+    for (size_t c = 0; c < dag.clusters.size(); ++c) {
+      ASSERT_EQ(serial.clusters[c].positions, dag.clusters[c].positions);
+      ASSERT_EQ(serial.clusters[c].indices, dag.clusters[c].indices);
+      ASSERT_EQ(serial.clusters[c].triangle_object_ids, dag.clusters[c].triangle_object_ids);
+      ASSERT_EQ(serial.clusters[c].error, dag.clusters[c].error);
+    }
+  }
+  // Proxy groups' errors are at least their proxy's iso offset's worth: never zero.
+  for (const tw::DagGroup& g : dag.groups) {
+    if (g.method == tw::GroupMethod::Proxy) {
+      EXPECT_GT(g.error, 0.0f);
     }
   }
 }

@@ -1,0 +1,115 @@
+// Seam edges between bricks; see brick_seams.h.
+#include "brick_seams.h"
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+
+#include "position_key.h"
+
+namespace tw {
+
+SeamEdgeKey seamEdgeKey(const glm::vec3& a, const glm::vec3& b) {
+  const PositionKey ka = positionKeyOf(a), kb = positionKeyOf(b);
+  const std::array<uint32_t, 3> pa{ka.x, ka.y, ka.z}, pb{kb.x, kb.y, kb.z};
+  return pa < pb ? SeamEdgeKey{pa[0], pa[1], pa[2], pb[0], pb[1], pb[2]}
+                 : SeamEdgeKey{pb[0], pb[1], pb[2], pa[0], pa[1], pa[2]};
+}
+
+std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
+                                      std::span<const uint32_t> indices) {
+  auto finite = [](const glm::vec3& p) {
+    return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+  };
+  std::vector<SeamEdgeKey> edges;
+  edges.reserve(indices.size());
+  for (size_t t = 0; t + 2 < indices.size(); t += 3) {
+    if (indices[t] >= positions.size() || indices[t + 1] >= positions.size() ||
+        indices[t + 2] >= positions.size())
+      continue;
+    const glm::vec3 p[3] = {positions[indices[t]], positions[indices[t + 1]],
+                            positions[indices[t + 2]]};
+    if (!finite(p[0]) || !finite(p[1]) || !finite(p[2])) continue;
+    const PositionKey k0 = positionKeyOf(p[0]), k1 = positionKeyOf(p[1]), k2 = positionKeyOf(p[2]);
+    if (k0 == k1 || k1 == k2 || k0 == k2) continue;  // degenerate after welding
+    for (int e = 0; e < 3; ++e) edges.push_back(seamEdgeKey(p[e], p[(e + 1) % 3]));
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<SeamEdgeKey> open;
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i + 1;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
+    if (j - i == 1) open.push_back(edges[i]);
+    i = j;
+  }
+  return open;
+}
+
+BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick) {
+  // Each list is unique, so a key present in the concatenation twice or more is open in two or
+  // more bricks.
+  std::vector<SeamEdgeKey> all;
+  size_t total = 0;
+  for (const auto& list : per_brick) total += list.size();
+  all.reserve(total);
+  for (auto& list : per_brick) {
+    all.insert(all.end(), list.begin(), list.end());
+    list = {};
+  }
+  std::sort(all.begin(), all.end());
+  BrickSeams seams;
+  for (size_t i = 0; i < all.size();) {
+    size_t j = i + 1;
+    while (j < all.size() && all[j] == all[i]) ++j;
+    if (j - i >= 2) seams.keys_.push_back(all[i]);
+    i = j;
+  }
+  return seams;
+}
+
+BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
+  if (scene.bricks.size() <= 1) return {};
+  // Both triangles of a seam edge contain it, so a seam edge of brick A lies inside the bounds of
+  // A and of the other brick. Keeping only the open edges inside some other brick's bounds is
+  // therefore exact, and it drops the model's own open edges away from brick borders, which keeps
+  // this small whatever the model's size.
+  const size_t n = scene.bricks.size();
+  auto overlaps = [](const BrickInfo& a, const BrickInfo& b) {
+    return glm::all(glm::lessThanEqual(a.bounds_min, b.bounds_max)) &&
+           glm::all(glm::lessThanEqual(b.bounds_min, a.bounds_max));
+  };
+  auto inside = [](const BrickInfo& box, const glm::vec3& p) {
+    return glm::all(glm::lessThanEqual(box.bounds_min, p)) &&
+           glm::all(glm::lessThanEqual(p, box.bounds_max));
+  };
+  beginStage(progress, "find seams", n);
+  std::vector<std::vector<SeamEdgeKey>> per_brick(n);
+  for (uint32_t b = 0; b < n; ++b) {
+    std::vector<uint32_t> neighbours;
+    for (uint32_t o = 0; o < n; ++o)
+      if (o != b && overlaps(scene.bricks[b], scene.bricks[o])) neighbours.push_back(o);
+    if (!neighbours.empty()) {
+      const BrickMesh mesh = loadBrick(scene, b);
+      for (const SeamEdgeKey& key : openEdgeKeys(mesh.positions, mesh.indices)) {
+        const glm::vec3 p0 = glm::vec3(std::bit_cast<float>(key[0]), std::bit_cast<float>(key[1]),
+                                       std::bit_cast<float>(key[2]));
+        const glm::vec3 p1 = glm::vec3(std::bit_cast<float>(key[3]), std::bit_cast<float>(key[4]),
+                                       std::bit_cast<float>(key[5]));
+        for (uint32_t o : neighbours)
+          if (inside(scene.bricks[o], p0) && inside(scene.bricks[o], p1)) {
+            per_brick[b].push_back(key);
+            break;
+          }
+      }
+    }
+    updateProgress(progress, b + 1);
+  }
+  endStage(progress);
+  return fromOpenEdges(std::move(per_brick));
+}
+
+bool BrickSeams::contains(const glm::vec3& a, const glm::vec3& b) const {
+  return std::binary_search(keys_.begin(), keys_.end(), seamEdgeKey(a, b));
+}
+
+}  // namespace tw

@@ -1,0 +1,54 @@
+// The seams between spatial bricks: the edges that are open (used by one triangle) in two bricks
+// at once, because bricking sent the two triangles of an edge to different bricks.
+//
+// Why: each brick's LOD DAG must keep its seams exactly (DagOptions::lock_open_boundaries), or
+// neighbouring bricks crack. But CAD models are full of open edges of their own (pipes without
+// caps, sheets, plates), and locking those too pins every such part for good: the DAG can then
+// neither simplify nor drop them, and its levels stall (a 10M-triangle tessellated plant in four
+// bricks shrank 4.19M -> 3.78M -> 3.68M -> 3.66M). Locking only the true seams leaves the model's
+// own open parts free, as in a single-brick build.
+//
+// Edges are compared by the exact bits of their two end positions (the DAG welds the same way),
+// so there is no hashing and no false match. Finding the set reads every brick once and keeps
+// only open edges lying inside another brick's bounds (24 bytes each): seams are among them, and
+// the model's own open edges far from brick borders are not.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "progress.h"
+#include "scene_bricking.h"
+
+namespace tw {
+
+// An undirected edge by the float bits of its end positions, smaller end first.
+using SeamEdgeKey = std::array<uint32_t, 6>;
+SeamEdgeKey seamEdgeKey(const glm::vec3& a, const glm::vec3& b);
+
+// Sorted, unique open-edge keys of one triangle soup (after exact welding; degenerate and
+// non-finite triangles are skipped, as the DAG skips them).
+std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
+                                      std::span<const uint32_t> indices);
+
+class BrickSeams {
+ public:
+  // From each brick's open edges: the keys found in at least two bricks. Reads every brick whose
+  // bounds overlap another's once (loadBrick); with one brick there are no seams and nothing is
+  // read.
+  static BrickSeams find(const BrickedScene& scene, Progress* progress = nullptr);
+  // From per-brick open-edge lists directly (tests).
+  static BrickSeams fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick);
+
+  bool contains(const glm::vec3& a, const glm::vec3& b) const;
+  size_t size() const { return keys_.size(); }
+
+ private:
+  std::vector<SeamEdgeKey> keys_;  // sorted, unique
+};
+
+}  // namespace tw
