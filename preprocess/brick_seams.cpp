@@ -16,8 +16,11 @@ SeamEdgeKey seamEdgeKey(const glm::vec3& a, const glm::vec3& b) {
                  : SeamEdgeKey{pb[0], pb[1], pb[2], pa[0], pa[1], pa[2]};
 }
 
-std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
-                                      std::span<const uint32_t> indices) {
+namespace {
+
+// Every edge of every valid triangle, sorted, with repeats (one entry per triangle side).
+std::vector<SeamEdgeKey> sortedEdgeKeys(std::span<const glm::vec3> positions,
+                                        std::span<const uint32_t> indices) {
   auto finite = [](const glm::vec3& p) {
     return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
   };
@@ -35,19 +38,36 @@ std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
     for (int e = 0; e < 3; ++e) edges.push_back(seamEdgeKey(p[e], p[(e + 1) % 3]));
   }
   std::sort(edges.begin(), edges.end());
-  std::vector<SeamEdgeKey> open;
-  for (size_t i = 0; i < edges.size();) {
+  return edges;
+}
+
+// Keeps each key once; with `only_single`, only keys that appeared exactly once.
+std::vector<SeamEdgeKey> distinct(const std::vector<SeamEdgeKey>& sorted, bool only_single) {
+  std::vector<SeamEdgeKey> out;
+  for (size_t i = 0; i < sorted.size();) {
     size_t j = i + 1;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) open.push_back(edges[i]);
+    while (j < sorted.size() && sorted[j] == sorted[i]) ++j;
+    if (!only_single || j - i == 1) out.push_back(sorted[i]);
     i = j;
   }
-  return open;
+  return out;
+}
+
+}  // namespace
+
+std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
+                                      std::span<const uint32_t> indices) {
+  return distinct(sortedEdgeKeys(positions, indices), true);
+}
+
+std::vector<SeamEdgeKey> edgeKeys(std::span<const glm::vec3> positions,
+                                  std::span<const uint32_t> indices) {
+  return distinct(sortedEdgeKeys(positions, indices), false);
 }
 
 BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick) {
-  // Each list is unique, so a key present in the concatenation twice or more is open in two or
-  // more bricks.
+  // Each list is unique, so a key present in the concatenation twice or more is in two or more
+  // bricks.
   std::vector<SeamEdgeKey> all;
   size_t total = 0;
   for (const auto& list : per_brick) total += list.size();
@@ -69,18 +89,21 @@ BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_b
 
 BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
   if (scene.bricks.size() <= 1) return {};
-  // Both triangles of a seam edge contain it, so a seam edge of brick A lies inside the bounds of
-  // A and of the other brick. Keeping only the open edges inside some other brick's bounds is
-  // therefore exact, and it drops the model's own open edges away from brick borders, which keeps
-  // this small whatever the model's size.
+  // A seam edge has triangles in both bricks, so it lies inside the bounds of both. Keeping only
+  // the edges inside some other brick's bounds (padded by a hair against rounding) is therefore
+  // exact, and keeps this small whatever the model's size. All edges are kept, not only the open
+  // ones: an edge used twice in one brick and once in another (non-manifold input) is open in
+  // the second only, and must still be locked there.
   const size_t n = scene.bricks.size();
   auto overlaps = [](const BrickInfo& a, const BrickInfo& b) {
-    return glm::all(glm::lessThanEqual(a.bounds_min, b.bounds_max)) &&
-           glm::all(glm::lessThanEqual(b.bounds_min, a.bounds_max));
+    const glm::vec3 pad = 1e-5f * (glm::abs(b.bounds_min) + glm::abs(b.bounds_max)) + 1e-6f;
+    return glm::all(glm::lessThanEqual(a.bounds_min, b.bounds_max + pad)) &&
+           glm::all(glm::lessThanEqual(b.bounds_min - pad, a.bounds_max));
   };
   auto inside = [](const BrickInfo& box, const glm::vec3& p) {
-    return glm::all(glm::lessThanEqual(box.bounds_min, p)) &&
-           glm::all(glm::lessThanEqual(p, box.bounds_max));
+    const glm::vec3 pad = 1e-5f * (glm::abs(box.bounds_min) + glm::abs(box.bounds_max)) + 1e-6f;
+    return glm::all(glm::lessThanEqual(box.bounds_min - pad, p)) &&
+           glm::all(glm::lessThanEqual(p, box.bounds_max + pad));
   };
   beginStage(progress, "find seams", n);
   std::vector<std::vector<SeamEdgeKey>> per_brick(n);
@@ -90,7 +113,7 @@ BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
       if (o != b && overlaps(scene.bricks[b], scene.bricks[o])) neighbours.push_back(o);
     if (!neighbours.empty()) {
       const BrickMesh mesh = loadBrick(scene, b);
-      for (const SeamEdgeKey& key : openEdgeKeys(mesh.positions, mesh.indices)) {
+      for (const SeamEdgeKey& key : edgeKeys(mesh.positions, mesh.indices)) {
         const glm::vec3 p0 = glm::vec3(std::bit_cast<float>(key[0]), std::bit_cast<float>(key[1]),
                                        std::bit_cast<float>(key[2]));
         const glm::vec3 p1 = glm::vec3(std::bit_cast<float>(key[3]), std::bit_cast<float>(key[4]),

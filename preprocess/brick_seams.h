@@ -10,8 +10,9 @@
 //
 // Edges are compared by the exact bits of their two end positions (the DAG welds the same way),
 // so there is no hashing and no false match. Finding the set reads every brick once and keeps
-// only open edges lying inside another brick's bounds (24 bytes each): seams are among them, and
-// the model's own open edges far from brick borders are not.
+// only edges lying inside another brick's bounds (24 bytes each): seams are among them, and the
+// model's own edges far from brick borders are not. An edge in two bricks is locked
+// wherever it is open, also when the other brick uses it twice (non-manifold input).
 #pragma once
 
 #include <array>
@@ -35,13 +36,17 @@ SeamEdgeKey seamEdgeKey(const glm::vec3& a, const glm::vec3& b);
 std::vector<SeamEdgeKey> openEdgeKeys(std::span<const glm::vec3> positions,
                                       std::span<const uint32_t> indices);
 
+// Sorted, unique keys of every edge of a triangle soup (same skipping rules).
+std::vector<SeamEdgeKey> edgeKeys(std::span<const glm::vec3> positions,
+                                  std::span<const uint32_t> indices);
+
 class BrickSeams {
  public:
-  // From each brick's open edges: the keys found in at least two bricks. Reads every brick whose
+  // The edges found in at least two bricks (the brick DAGs consult it for their open edges). Reads every brick whose
   // bounds overlap another's once (loadBrick); with one brick there are no seams and nothing is
   // read.
   static BrickSeams find(const BrickedScene& scene, Progress* progress = nullptr);
-  // From per-brick open-edge lists directly (tests).
+  // From per-brick unique edge lists directly (tests).
   static BrickSeams fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick);
 
   bool contains(const glm::vec3& a, const glm::vec3& b) const;

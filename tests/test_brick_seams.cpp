@@ -52,5 +52,19 @@ TEST(BrickSeams, OnlyEdgesOpenInTwoBricksAreSeams) {
   EXPECT_EQ(BrickSeams::fromOpenEdges({openEdgeKeys(a, tris)}).size(), 0u);
 }
 
+// Non-manifold input: an edge used by two triangles in one brick and one in another is open in
+// the second brick only; it must still count as a seam there.
+TEST(BrickSeams, AnEdgeUsedTwiceInOneBrickAndOnceInAnotherIsASeam) {
+  const std::vector<glm::vec3> p = {{0, 0, 0}, {1, 0, 0}, {0.5f, 1, 0}, {0.5f, -1, 0},
+                                    {0.5f, 0, 1}};
+  const std::vector<uint32_t> two = {0, 1, 2, 1, 0, 3};  // edge 0-1 used twice
+  const std::vector<uint32_t> one = {0, 1, 4};
+  const auto open_in_two = openEdgeKeys(p, two);
+  EXPECT_FALSE(std::binary_search(open_in_two.begin(), open_in_two.end(), seamEdgeKey(p[0], p[1])));
+  BrickSeams seams = BrickSeams::fromOpenEdges({edgeKeys(p, two), edgeKeys(p, one)});
+  EXPECT_TRUE(seams.contains(p[0], p[1]));
+  EXPECT_FALSE(seams.contains(p[0], p[2]));
+}
+
 }  // namespace
 }  // namespace tw
