@@ -17,23 +17,9 @@
 namespace tw {
 namespace {
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
+using RunResult = test::CommandResult;
 
-RunResult run(const std::string& args) {
-  std::string command = std::string(TW_TERAWALK_EXE) + " " + args + " 2>&1";
-  RunResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
-  int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+RunResult run(const std::string& args) { return test::runTerawalk(args); }
 
 nlohmann::json infoJson(const std::filesystem::path& file) {
   RunResult r = run("info --json --quiet " + file.string());
@@ -307,17 +293,11 @@ TEST(Cli, ViewRunsUnderXvfbAndSavesAScreenshot) {
   if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xvfb-run";
   auto package = bunnyPackageForCli();
   auto shot = test::scratchDir() / "view.png";
-  std::string command = "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(TW_TERAWALK_EXE) +
-                        " view " + package.string() + " --size 320x240 --frames 3 --screenshot " +
-                        shot.string() + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) output.append(buf, n);
-  int status = pclose(pipe);
-  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << output;
+  const test::CommandResult r = test::runShell(
+      "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(TW_TERAWALK_EXE) + " view " +
+      package.string() + " --size 320x240 --frames 3 --screenshot " + shot.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const std::string& output = r.output;
   EXPECT_TRUE(std::filesystem::exists(shot)) << output;
   EXPECT_GT(std::filesystem::file_size(shot), 500u);
 }

@@ -170,17 +170,18 @@ TEST_F(FrameLoop, SlowPagesNeverStallAFrameAndTheCutConverges) {
   options.tau_px = 0.5;
   options.pager.loader_threads = 1;
   options.page_source = [](const PackageView& view) {
-    return std::make_unique<SlowSource>(view, std::chrono::milliseconds(150));
+    return std::make_unique<SlowSource>(view, std::chrono::milliseconds(400));
   };
   Walkthrough walk(bunnyPackage(), options);
   const glm::dvec3 center = 0.5 * (walk.worldMin() + walk.worldMax());
   const double size = glm::length(walk.worldMax() - walk.worldMin());
-  // Teleport close: the cut wants pages that take 150 ms each to read.
+  // Teleport close: the cut wants pages that take 400 ms each to read (long, so that a loaded CI
+  // machine's slow frames are never mistaken for a wait).
   const Camera close = lookingAt(center + glm::dvec3(0, -0.6 * size, 0.1 * size), center);
   FrameStats first = walk.renderFrame(close, 0.0);
   EXPECT_GT(first.ancestor_fallbacks, 0u);
   EXPECT_GT(first.triangles_drawn, 0u);  // the resident ancestors, never a hole
-  EXPECT_LT(first.frame_ms, 150.0) << "the frame waited for a page read";
+  EXPECT_LT(first.frame_ms, 400.0) << "the frame waited for a page read";
   FrameStats last = first;
   int frames = 1;
   const auto start = std::chrono::steady_clock::now();
@@ -188,7 +189,7 @@ TEST_F(FrameLoop, SlowPagesNeverStallAFrameAndTheCutConverges) {
          std::chrono::steady_clock::now() - start < std::chrono::seconds(60)) {
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
     last = walk.renderFrame(close, 0.0);
-    EXPECT_LT(last.frame_ms, 150.0) << "frame " << frames << " waited for a page read";
+    EXPECT_LT(last.frame_ms, 400.0) << "frame " << frames << " waited for a page read";
     ++frames;
   }
   EXPECT_EQ(last.ancestor_fallbacks, 0u) << "the cut did not converge in " << frames << " frames";

@@ -310,23 +310,9 @@ TEST(ImagePng, DamagedPngsAreRejectedCleanly) {
 
 // --- `terawalk compare` through the real executable ---
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;  // stdout and stderr together
-};
+using RunResult = test::CommandResult;
 
-RunResult run(const std::string& args) {
-  std::string command = std::string(TW_TERAWALK_EXE) + " " + args + " 2>&1";
-  RunResult result;
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return result;
-  char buf[4096];
-  size_t n;
-  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
-  int status = pclose(pipe);
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return result;
-}
+RunResult run(const std::string& args) { return test::runTerawalk(args); }
 
 void writeFrame(const fs::path& dir, int number, const Frame& f, bool with_ids = true) {
   char name[32];

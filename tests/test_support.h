@@ -2,11 +2,13 @@
 // truncate-and-corrupt harness every reader test runs its fixtures through.
 #pragma once
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -42,6 +44,32 @@ inline std::filesystem::path scratchDir() {
   std::filesystem::create_directories(dir);
   return dir;
 }
+
+// What a command printed (stdout and stderr together) and its exit code (-1 if it did not exit).
+struct CommandResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+// Runs `command` through the shell and collects its output.
+inline CommandResult runShell(const std::string& command) {
+  CommandResult result;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return result;
+  char buf[4096];
+  size_t n;
+  while ((n = std::fread(buf, 1, sizeof buf, pipe)) > 0) result.output.append(buf, n);
+  const int status = pclose(pipe);
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return result;
+}
+
+#ifdef TW_TERAWALK_EXE
+// Runs the `terawalk` executable this build made with `args`.
+inline CommandResult runTerawalk(const std::string& args) {
+  return runShell(std::string(TW_TERAWALK_EXE) + " " + args);
+}
+#endif
 
 // A fresh directory shared by every test of this process, for fixtures built once per test program
 // (a package several tests render). Named by the process id, because ctest runs the tests of one
