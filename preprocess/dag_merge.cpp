@@ -81,6 +81,25 @@ MergedRoots mergeBrickRoots(std::vector<DagCluster> roots, const DagOptions& opt
   return merged;
 }
 
+void appendMergedLevels(MergedRoots& merged, std::span<const uint32_t> front_ids,
+                        uint32_t cluster_base, uint32_t group_base,
+                        std::vector<DagCluster>& clusters, std::vector<DagGroup>& groups) {
+  const uint32_t front = merged.front_count;
+  auto cluster_id = [&](uint32_t id) { return id < front ? front_ids[id] : cluster_base + id - front; };
+  auto group_id = [&](uint32_t g) { return g == kNoGroup ? kNoGroup : group_base + g; };
+  for (uint32_t i = front; i < merged.dag.clusters.size(); ++i) {
+    DagCluster& c = merged.dag.clusters[i];
+    c.group = group_id(c.group);
+    c.parent_group = group_id(c.parent_group);
+    clusters.push_back(std::move(c));
+  }
+  for (DagGroup& g : merged.dag.groups) {
+    for (uint32_t& child : g.children) child = cluster_id(child);
+    for (uint32_t& made : g.clusters) made = cluster_id(made);
+    groups.push_back(std::move(g));
+  }
+}
+
 ClusterDag mergeBrickDags(std::vector<ClusterDag> bricks, const DagOptions& options) {
   ClusterDag dag;
   for (ClusterDag& brick : bricks) {
@@ -118,7 +137,6 @@ ClusterDag mergeBrickDags(std::vector<ClusterDag> bricks, const DagOptions& opti
   const uint32_t cluster_base = uint32_t(dag.clusters.size());
   const uint32_t group_base = uint32_t(dag.groups.size());
   const uint32_t front = merged.front_count;
-  auto cluster_id = [&](uint32_t id) { return id < front ? root_ids[id] : cluster_base + id - front; };
   auto group_id = [&](uint32_t g) { return g == kNoGroup ? kNoGroup : group_base + g; };
   for (uint32_t i = 0; i < front; ++i) {
     const DagCluster& from = merged.dag.clusters[i];
@@ -128,17 +146,7 @@ ClusterDag mergeBrickDags(std::vector<ClusterDag> bricks, const DagOptions& opti
     to.parent_lod_center = from.parent_lod_center;
     to.parent_lod_radius = from.parent_lod_radius;
   }
-  for (uint32_t i = front; i < merged.dag.clusters.size(); ++i) {
-    DagCluster& c = merged.dag.clusters[i];
-    c.group = group_id(c.group);
-    c.parent_group = group_id(c.parent_group);
-    dag.clusters.push_back(std::move(c));
-  }
-  for (DagGroup& g : merged.dag.groups) {
-    for (uint32_t& child : g.children) child = cluster_id(child);
-    for (uint32_t& made : g.clusters) made = cluster_id(made);
-    dag.groups.push_back(std::move(g));
-  }
+  appendMergedLevels(merged, root_ids, cluster_base, group_base, dag.clusters, dag.groups);
   addStats(dag.stats, merged.dag.stats);
   dag.stats.root_within_limit = merged.dag.stats.root_within_limit;
   countLevels(dag);

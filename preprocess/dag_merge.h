@@ -22,6 +22,7 @@
 // larger merge. Bricks must share one position frame (one package origin) and weld exactly.
 #pragma once
 
+#include <span>
 #include <vector>
 
 #include "cluster_dag.h"
@@ -47,6 +48,14 @@ struct MergedRoots {
   uint32_t front_count = 0;
 };
 MergedRoots mergeBrickRoots(std::vector<DagCluster> roots, const DagOptions& options = {});
+
+// Moves the merged levels (the clusters after the front, and every group) of `merged` into a
+// DAG's numbering: front cluster i is `front_ids[i]`, merged cluster j (j >= front_count) becomes
+// cluster_base + j - front_count and merged group g becomes group_base + g. The front's own
+// records (their new parents) are the caller's to update.
+void appendMergedLevels(MergedRoots& merged, std::span<const uint32_t> front_ids,
+                        uint32_t cluster_base, uint32_t group_base,
+                        std::vector<DagCluster>& clusters, std::vector<DagGroup>& groups);
 
 // Bookkeeping shared with the preprocessor, which sums bricks without holding them: `to` += the
 // counters of `from` (root_within_limit untouched); triangles_per_level, clusters_per_level and

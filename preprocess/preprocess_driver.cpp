@@ -271,12 +271,8 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
       for (uint32_t id : brick.root_ids) root_global.push_back(brick.first_cluster + id);
       brick.root_parents.resize(brick.root_ids.size());
     }
-    const uint32_t front = merged.front_count;
     auto group_id = [&](uint32_t g) {
       return g == kNoGroup ? kNoGroup : uint32_t(total_groups) + g;
-    };
-    auto cluster_id = [&](uint32_t id) {
-      return id < front ? root_global[id] : uint32_t(total_clusters) + id - front;
     };
     uint32_t f = 0;
     for (BrickRecord& brick : bricks)
@@ -285,17 +281,8 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
         parent = {group_id(root.parent_group), root.parent_error, root.parent_lod_center,
                   root.parent_lod_radius};
       }
-    for (uint32_t i = front; i < merged.dag.clusters.size(); ++i) {
-      DagCluster& c = merged.dag.clusters[i];
-      c.group = group_id(c.group);
-      c.parent_group = group_id(c.parent_group);
-      upper.clusters.push_back(std::move(c));
-    }
-    for (DagGroup& g : merged.dag.groups) {
-      for (uint32_t& child : g.children) child = cluster_id(child);
-      for (uint32_t& made : g.clusters) made = cluster_id(made);
-      upper.groups.push_back(std::move(g));
-    }
+    appendMergedLevels(merged, root_global, uint32_t(total_clusters), uint32_t(total_groups),
+                       upper.clusters, upper.groups);
     addLevels(report.triangles_per_level, upper);
   }
   if (total_clusters + upper.clusters.size() >= pkg::kNone ||
