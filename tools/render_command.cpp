@@ -12,13 +12,13 @@
 #include <string>
 
 #include <nlohmann/json.hpp>
-#include <stb_image_write.h>
 
 #include "camera_path.h"
 #include "command.h"
 #include "command_args.h"
 #include "egl_context.h"
 #include "frame_loop.h"
+#include "image_compare.h"
 
 namespace tw {
 namespace {
@@ -51,14 +51,10 @@ void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint
   char name[64];
   renderer.readColor(rgba, true);
   std::snprintf(name, sizeof name, "frame_%05llu.png", static_cast<unsigned long long>(index));
-  const int w = renderer.width(), h = renderer.height();
-  if (!stbi_write_png((dir / name).string().c_str(), w, h, 4, rgba.data(), w * 4))
-    throw std::runtime_error((dir / name).string() + ": cannot write PNG");
-  // Object ids, lossless: each pixel's uint32 (object index + 1) as its RGBA bytes.
+  writePngRgba(dir / name, renderer.width(), renderer.height(), rgba);
   renderer.readObjectIds(ids, true);
   std::snprintf(name, sizeof name, "ids_%05llu.png", static_cast<unsigned long long>(index));
-  if (!stbi_write_png((dir / name).string().c_str(), w, h, 4, ids.data(), w * 4))
-    throw std::runtime_error((dir / name).string() + ": cannot write PNG");
+  writePngRgba(dir / name, renderer.width(), renderer.height(), idsToRgba(ids));
 }
 
 void runRender(const RenderArgs& args, const GlobalOptions& global) {

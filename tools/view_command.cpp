@@ -19,12 +19,12 @@
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
 #include <imgui_impl_opengl3.h>
-#include <stb_image_write.h>
 
 #include "camera_path.h"
 #include "command.h"
 #include "command_args.h"
 #include "frame_loop.h"
+#include "image_compare.h"
 
 namespace tw {
 namespace {
@@ -51,9 +51,7 @@ struct GlfwSession {
 void saveScreenshot(GlRenderer& renderer, const std::string& file) {
   std::vector<uint8_t> rgba;
   renderer.readColor(rgba, true);
-  if (!stbi_write_png(file.c_str(), renderer.width(), renderer.height(), 4, rgba.data(),
-                      renderer.width() * 4))
-    throw std::runtime_error(file + ": cannot write PNG");
+  writePngRgba(file, renderer.width(), renderer.height(), rgba);
   std::fprintf(stderr, "view: wrote %s\n", file.c_str());
 }
 
@@ -98,13 +96,14 @@ struct Navigator {
   }
 };
 
-Navigator* g_navigator = nullptr;  // GLFW callbacks carry no user state beyond the window
-
-void onScroll(GLFWwindow*, double, double dy) {
-  if (!g_navigator || ImGui::GetIO().WantCaptureMouse) return;
+// The wheel scales the walking speed, or the orbit distance; the navigator is the window's user
+// pointer.
+void onScroll(GLFWwindow* window, double, double dy) {
+  auto* nav = static_cast<Navigator*>(glfwGetWindowUserPointer(window));
+  if (!nav || ImGui::GetIO().WantCaptureMouse) return;
   const double factor = std::pow(1.25, dy);
-  if (g_navigator->orbit) g_navigator->orbit_distance /= factor;
-  else g_navigator->speed_mps *= factor;
+  if (nav->orbit) nav->orbit_distance /= factor;
+  else nav->speed_mps *= factor;
 }
 
 void runView(const ViewArgs& args) {
@@ -140,7 +139,7 @@ void runView(const ViewArgs& args) {
     bounds.add(walk.worldMax());
     const double diagonal = glm::length(bounds.max - bounds.min);
     Navigator nav;
-    g_navigator = &nav;
+    glfwSetWindowUserPointer(window, &nav);
     glfwSetScrollCallback(window, onScroll);
     nav.speed_mps = std::max(1.0, diagonal / 30.0);
     nav.orbit_target = 0.5 * (bounds.min + bounds.max);
@@ -257,7 +256,7 @@ void runView(const ViewArgs& args) {
       }
     }
     if (recording_on && !recording.keys.empty()) writeCameraPath(recording, args.record_file);
-    g_navigator = nullptr;
+    glfwSetWindowUserPointer(window, nullptr);
   }
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
