@@ -39,24 +39,9 @@ constexpr uint32_t kNone = pkg::kNone;
 constexpr double kPi = std::numbers::pi;
 constexpr double kWidth = 1280, kHeight = 720;
 
-// Packages built once per process. ctest runs every test as its own process, maybe several at
-// once, so each process builds in a directory of its own and removes it at exit.
-fs::path modelDir() {
-  struct Dir {
-    fs::path path = test::scratchRoot() / "terawalk-tests" /
-                    ("LodCutModels-" + std::to_string(::getpid()));
-    Dir() {
-      fs::remove_all(path);
-      fs::create_directories(path);
-    }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static Dir dir;
-  return dir.path;
-}
+// Packages built once per process (test::processScratchDir: ctest runs every test as its own
+// process, maybe several at once).
+fs::path modelDir() { return test::processScratchDir("LodCutModels"); }
 
 // ---- Test scenes ----
 
@@ -74,26 +59,7 @@ fs::path writePlantScene(const fs::path& dir) {
     object.info.id = id;
     object.info.name = "box " + std::to_string(id++);
     object.info.transform.origin = origin;
-    TriangleMesh mesh;
-    for (int face = 0; face < 6; ++face) {
-      int axis = face / 2;
-      float side = (face % 2) ? 1.0f : -1.0f;
-      auto base = static_cast<uint32_t>(mesh.positions.size());
-      for (int i = 0; i <= n; ++i)
-        for (int j = 0; j <= n; ++j) {
-          glm::vec3 p(0.0f);
-          p[axis] = side;
-          p[(axis + 1) % 3] = -1.0f + 2.0f * i / n;
-          p[(axis + 2) % 3] = -1.0f + 2.0f * j / n;
-          mesh.positions.push_back(p * half);
-        }
-      for (int i = 0; i < n; ++i)
-        for (int j = 0; j < n; ++j) {
-          uint32_t a = base + i * (n + 1) + j, b = a + 1, c = a + (n + 1), d = c + 1;
-          if (side > 0) mesh.indices.insert(mesh.indices.end(), {a, c, d, a, d, b});
-          else mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
-    }
+    TriangleMesh mesh = test::subdividedBox(half, n);
     // Face grids repeat their shared edges' positions exactly; the DAG builder welds them.
     object.geometry = std::move(mesh);
     writer.onObject(object);

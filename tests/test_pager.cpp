@@ -177,23 +177,11 @@ TEST(PoolLayout, SplitsTheBudgetWithoutExceedingIt) {
 // ---------------------------------------------------------------------------------------------
 // Packages
 
-// Packages shared by the tests of one process, in a directory of its own (ctest may run several
-// test_pager processes at once), removed at exit.
+// Packages shared by the tests of one process (ctest may run several test_pager processes at
+// once).
 const fs::path& fixtureDir() {
-  struct Dir {
-    fs::path path = test::scratchRoot() / "terawalk-tests" /
-                    ("pager-fixtures-" + std::to_string(::getpid()));
-    Dir() {
-      fs::remove_all(path);
-      fs::create_directories(path);
-    }
-    ~Dir() {
-      std::error_code ec;
-      fs::remove_all(path, ec);
-    }
-  };
-  static const Dir dir;
-  return dir.path;
+  static const fs::path dir = test::processScratchDir("pager-fixtures");
+  return dir;
 }
 
 // The bunny through the real preprocessor: a handful of pages over several LOD levels.
@@ -324,6 +312,15 @@ class TestSource : public PageSource {
   std::vector<int> reads_;
   std::vector<uint32_t> order_;
 };
+
+// Waits (up to 5 s) until the source has started `reads` reads: the loaders are then busy, with
+// no guess at how long that takes on a loaded machine.
+void waitForReads(const TestSource& source, size_t reads) {
+  const auto start = std::chrono::steady_clock::now();
+  while (source.order().size() < reads &&
+         std::chrono::steady_clock::now() - start < std::chrono::seconds(5))
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+}
 
 // Checks an upload against the view's decode and the pager's cluster placements.
 void expectUploadMatches(const Pager& pager, const PageUpload& up, const ExpectedPage& expected) {
@@ -475,7 +472,7 @@ TEST(Pager, LoadsTheHighestPriorityFirst) {
   std::vector<uint32_t> pages = {20};
   pager.beginFrame(1);
   pager.request(20, 1.0f);
-  std::this_thread::sleep_for(2ms);
+  waitForReads(*src, 1);
   for (uint32_t p = 0; p < 12; ++p) pages.push_back(p);
   auto priority = [](uint32_t p) { return static_cast<float>((p * 7) % 12); };  // shuffled
   uint64_t frame = 1;
@@ -500,7 +497,7 @@ TEST(Pager, RenewedRequestsReorderTheQueue) {
   Pager pager(view, std::move(source), options);
   pager.beginFrame(1);
   pager.request(0, 100.0f);
-  std::this_thread::sleep_for(20ms);  // the loader is now busy with page 0
+  waitForReads(*src, 1);  // the loader is now busy with page 0
   for (uint32_t p = 1; p <= 5; ++p) pager.request(p, 10.0f * p);
   pager.beginFrame(2);
   for (uint32_t p = 1; p <= 5; ++p) pager.request(p, static_cast<float>(10 - p));
@@ -527,7 +524,7 @@ TEST(Pager, DropsQueuedPagesNoLongerRequested) {
   pager.beginFrame(1);
   for (uint32_t p = 0; p < 6; ++p) pager.request(p, p == 0 ? 10.0f : 1.0f);
   EXPECT_EQ(pager.state(3), PageState::Requested);
-  std::this_thread::sleep_for(40ms);  // no other call: loaders see requests at once
+  waitForReads(*src, 1);  // no other call: loaders see requests at once
   EXPECT_EQ(pager.state(0), PageState::Loading) << "the only loader is reading page 0";
   EXPECT_EQ(pager.stats().pages_requested, 5u);
   for (uint64_t frame = 2; frame <= 7; ++frame) {

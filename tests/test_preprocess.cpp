@@ -39,33 +39,7 @@ fs::path writeScene(const fs::path& dir) {
       object.info.name = "block " + std::to_string(gx) + "," + std::to_string(gy);
       object.info.db_key = "B-" + std::to_string(object.info.id);
       object.info.transform.origin = {gx * 30.0 + 500000.0, gy * 30.0 + 7000000.0, 0.0};
-      // A subdivided box: 6 faces of n x n quads, welded, closed.
-      constexpr int n = 8;
-      TriangleMesh mesh;
-      auto vertex = [&](glm::vec3 p) {
-        mesh.positions.push_back(p * 5.0f);
-        return static_cast<uint32_t>(mesh.positions.size() - 1);
-      };
-      for (int face = 0; face < 6; ++face) {
-        int axis = face / 2;
-        float side = (face % 2) ? 1.0f : -1.0f;
-        uint32_t base = static_cast<uint32_t>(mesh.positions.size());
-        for (int i = 0; i <= n; ++i)
-          for (int j = 0; j <= n; ++j) {
-            glm::vec3 p(0.0f);
-            p[axis] = side;
-            p[(axis + 1) % 3] = -1.0f + 2.0f * i / n;
-            p[(axis + 2) % 3] = -1.0f + 2.0f * j / n;
-            vertex(p);
-          }
-        for (int i = 0; i < n; ++i)
-          for (int j = 0; j < n; ++j) {
-            uint32_t a = base + i * (n + 1) + j, b = a + 1, c = a + (n + 1), d = c + 1;
-            if (side > 0) mesh.indices.insert(mesh.indices.end(), {a, c, d, a, d, b});
-            else mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-          }
-      }
-      object.geometry = std::move(mesh);
+      object.geometry = test::subdividedBox(glm::vec3(5.0f), 8);
       writer.onObject(object);
     }
   for (int i = 0; i < 20; ++i) {

@@ -12,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <map>
+#include <memory>
 #include <random>
 #include <sstream>
 #include <string>
@@ -72,16 +74,53 @@ inline CommandResult runTerawalk(const std::string& args) {
 #endif
 
 // A fresh directory shared by every test of this process, for fixtures built once per test program
-// (a package several tests render). Named by the process id, because ctest runs the tests of one
-// program as parallel processes, and kept apart from scratchDir(), which each test clears.
+// (a package several tests render), removed when the process exits. Named by the process id,
+// because ctest runs the tests of one program as parallel processes, and kept apart from
+// scratchDir(), which each test clears.
 inline std::filesystem::path processScratchDir(const std::string& name) {
-  static const std::string suffix = "-" + std::to_string(::getpid());
-  auto dir = scratchRoot() / "terawalk-tests" / (name + suffix);
-  static bool cleared = false;
-  if (!cleared) std::filesystem::remove_all(dir);
-  cleared = true;
-  std::filesystem::create_directories(dir);
-  return dir;
+  struct Dir {
+    std::filesystem::path path;
+    explicit Dir(std::filesystem::path p) : path(std::move(p)) {
+      std::filesystem::remove_all(path);
+      std::filesystem::create_directories(path);
+    }
+    ~Dir() {
+      std::error_code ec;
+      std::filesystem::remove_all(path, ec);
+    }
+  };
+  static std::map<std::string, std::unique_ptr<Dir>> dirs;
+  std::unique_ptr<Dir>& dir = dirs[name];
+  if (!dir)
+    dir = std::make_unique<Dir>(scratchRoot() / "terawalk-tests" /
+                                (name + "-" + std::to_string(::getpid())));
+  return dir->path;
+}
+
+// A closed box of half extents `half` around the origin, each face an n x n grid of quads
+// (outward, counter-clockwise), vertices shared within a face only.
+inline TriangleMesh subdividedBox(const glm::vec3& half, int n) {
+  TriangleMesh mesh;
+  for (int face = 0; face < 6; ++face) {
+    const int axis = face / 2;
+    const float side = (face % 2) ? 1.0f : -1.0f;
+    const auto base = static_cast<uint32_t>(mesh.positions.size());
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j <= n; ++j) {
+        glm::vec3 p(0.0f);
+        p[axis] = side;
+        p[(axis + 1) % 3] = -1.0f + 2.0f * i / n;
+        p[(axis + 2) % 3] = -1.0f + 2.0f * j / n;
+        mesh.positions.push_back(p * half);
+      }
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j < n; ++j) {
+        const uint32_t a = base + i * (n + 1) + j, b = a + 1, c = a + (n + 1), d = c + 1;
+        if (side > 0) mesh.indices.insert(mesh.indices.end(), {a, c, d, a, d, b});
+        else mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+      }
+  }
+  return mesh;
 }
 
 inline void writeFile(const std::filesystem::path& path, const std::string& bytes) {
