@@ -65,6 +65,7 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   addString("bricking-v1");
   addValue(effectiveMaxBrickTriangles(options));
   addValue(options.nurbs_tolerance);
+  addValue(options.position_step_m);
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

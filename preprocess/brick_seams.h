@@ -11,8 +11,9 @@
 // Edges are compared by the exact bits of their two end positions (the DAG welds the same way),
 // so there is no hashing and no false match. Finding the set reads every brick once and keeps
 // only edges lying inside another brick's bounds (24 bytes each): seams are among them, and the
-// model's own edges far from brick borders are not. An edge in two bricks is locked
-// wherever it is open, also when the other brick uses it twice (non-manifold input).
+// model's own edges far from brick borders are not. An edge in two bricks is locked in both,
+// whatever its count in each (a non-manifold edge used three times in one brick and once in the
+// other is still where they meet).
 #pragma once
 
 #include <array>

@@ -15,6 +15,7 @@
 #include "clusterize.h"
 #include "edge_counts.h"
 #include "far_proxy.h"
+#include "grid_weld.h"
 
 namespace tw {
 
@@ -518,6 +519,31 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   return outcome;
 }
 
+// Whether lock_open_boundaries locks a first-front edge used by `triangles` triangles: a brick
+// seam (is_seam_edge) whatever its count here, as the other brick may use it too (a non-manifold
+// edge used three times here and once there is still where the two bricks meet); without
+// is_seam_edge, every open edge.
+bool isLockedEdge(size_t triangles, const glm::vec3& a, const glm::vec3& b,
+                  const DagOptions& options) {
+  if (!options.lock_open_boundaries) return false;
+  return options.is_seam_edge ? options.is_seam_edge(a, b) : triangles == 1;
+}
+
+// Vertices of the open edges that continueClusterDag will lock for good (lock_open_boundaries,
+// filtered by is_seam_edge): the grid weld must not move them. Empty when nothing is locked.
+std::vector<uint8_t> lockedSeamVertices(const std::vector<glm::vec3>& positions,
+                                        const std::vector<uint32_t>& tris,
+                                        const DagOptions& options) {
+  std::vector<uint8_t> keep;
+  if (!options.lock_open_boundaries) return keep;
+  keep.assign(positions.size(), 0);
+  for (const EdgeCount& e : countEdges(tris, positions.size())) {
+    const uint32_t a = uint32_t(e.key >> 32), b = uint32_t(e.key);
+    if (isLockedEdge(e.count, positions[a], positions[b], options)) keep[a] = keep[b] = 1;
+  }
+  return keep;
+}
+
 }  // namespace
 
 ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
@@ -582,15 +608,29 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
   std::vector<std::vector<uint32_t>> front_tris;
   std::vector<uint32_t> front_ids;
   {
-    std::vector<uint32_t> slot(positions.size(), kUnowned);
     TriangleClusters split = clusterizeTriangles(positions, tris, options.cluster_size);
+    if (options.position_step_m > 0.0) {
+      GridWeld weld = weldOnPackageGrid(positions, tris, split,
+                                        lockedSeamVertices(positions, tris, options),
+                                        options.position_step_m);
+      for (uint32_t& v : tris) v = weld.remap[v];
+      positions = std::move(weld.positions);
+      dag.stats.grid_welded_vertices = weld.merged_vertices;
+    }
+    std::vector<uint32_t> slot(positions.size(), kUnowned);
     for (size_t c = 0; c < split.clusterCount(); ++c) {
       WorkCluster wc;
       for (uint32_t i = split.offsets[c]; i < split.offsets[c + 1]; ++i) {
         uint32_t t = split.triangles[i];
-        wc.tris.insert(wc.tris.end(), tris.begin() + 3 * t, tris.begin() + 3 * t + 3);
+        const uint32_t a = tris[3 * t], b = tris[3 * t + 1], d = tris[3 * t + 2];
+        if (a == b || b == d || a == d) {  // collapsed by the grid weld
+          ++dag.stats.skipped_triangles;
+          continue;
+        }
+        wc.tris.insert(wc.tris.end(), {a, b, d});
         wc.ids.push_back(ids[t]);
       }
+      if (wc.ids.empty()) continue;
       front_ids.push_back(uint32_t(dag.clusters.size()));
       dag.clusters.push_back(makeCluster(positions, wc.tris, wc.ids, slot));
       front_tris.push_back(std::move(wc.tris));
@@ -639,7 +679,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       size_t j = i + 1;
       while (j < keys.size() && keys[j] == keys[i]) ++j;
       const uint32_t a = uint32_t(keys[i] >> 32), b = uint32_t(keys[i]);
-      if (j - i == 1 && (!options.is_seam_edge || options.is_seam_edge(positions[a], positions[b]))) {
+      if (isLockedEdge(j - i, positions[a], positions[b], options)) {
         open_edges.push_back(keys[i]);
         open_vertex[uint32_t(keys[i] >> 32)] = open_vertex[uint32_t(keys[i])] = 1;
       }

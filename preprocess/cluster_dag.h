@@ -108,11 +108,17 @@ struct DagOptions {
   // isolated model gains nothing from it and CAD sheets could no longer be dropped); the brick
   // builds of the preprocessor turn it on.
   bool lock_open_boundaries = false;
-  // With lock_open_boundaries: when set, only the open edges it accepts (given their two end
-  // positions) are locked; the input's other open edges stay free like in an unlocked build. The
-  // preprocessor passes the true brick seams (brick_seams.h), so CAD parts with open edges of
-  // their own (uncapped pipes, sheets) still simplify and drop.
+  // With lock_open_boundaries: when set, the edges it accepts (given their two end positions)
+  // are locked instead, whatever their triangle count (a non-manifold seam edge may be used three
+  // times in this brick and once in the next); the input's open edges it refuses stay free like
+  // in an unlocked build. The preprocessor passes the true brick seams (brick_seams.h), so CAD
+  // parts with open edges of their own (uncapped pipes, sheets) still simplify and drop.
   std::function<bool(const glm::vec3&, const glm::vec3&)> is_seam_edge;
+  // When > 0: the package's base position step (metres). Full-resolution vertices are snapped to
+  // the grid their level-0 cluster will be stored on, and welded where they coincide
+  // (grid_weld.h), so that vertices the package will store as one are one vertex in the DAG too.
+  // Locked seam vertices (lock_open_boundaries) are left where they are. 0: exact positions.
+  double position_step_m = 0.0;
 };
 
 constexpr uint32_t kNoGroup = std::numeric_limits<uint32_t>::max();
@@ -164,6 +170,7 @@ struct DagGroup {
 struct DagBuildStats {
   uint64_t input_triangles = 0;
   uint64_t skipped_triangles = 0;   // degenerate after welding, or non-finite positions
+  uint64_t grid_welded_vertices = 0;  // merged by the package-grid weld (position_step_m)
   uint32_t groups_locked = 0;
   uint32_t groups_sloppy = 0;
   uint32_t groups_dropped = 0;

@@ -28,7 +28,7 @@ using Clock = std::chrono::steady_clock;
 
 // Bumped whenever the preprocessor's output changes for the same inputs and options, so that a
 // resume never mixes bricks built by two versions.
-constexpr uint32_t kPreprocessorRevision = 2;
+constexpr uint32_t kPreprocessorRevision = 3;
 
 uint64_t peakRssBytes() {
   rusage usage{};
@@ -150,6 +150,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   bricking.work_dir = workDirFor(options.output);
   bricking.memory_budget_bytes = options.memory_budget_bytes;
   bricking.max_brick_triangles = options.max_brick_triangles;
+  bricking.position_step_m = pkg::kDefaultPositionStepM;
   bricking.progress = progress;
   DagOptions dag_options;
   dag_options.cluster_size = options.cluster_size;
@@ -204,6 +205,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   clock.start("build bricks");
   beginStage(progress, "build bricks", scene.bricks.size());
   PackageStorage storage;
+  brick_options.position_step_m = storage.position_step_m;
   QuantizationSnapper snapper(storage.position_step_m);
   const uint64_t resident_limit = options.memory_budget_bytes / 8;
   std::vector<BrickRecord> bricks(scene.bricks.size());

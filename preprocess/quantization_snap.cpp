@@ -12,6 +12,7 @@
 #include <tbb/parallel_for.h>
 
 #include "edge_counts.h"
+#include "grid_weld.h"
 #include "package_format.h"
 
 namespace tw {
@@ -20,32 +21,6 @@ namespace {
 
 constexpr uint32_t kNotShared = std::numeric_limits<uint32_t>::max();
 constexpr uint32_t kTooCoarse = pkg::kMaxPositionShift + 1;
-
-// The shift encodeCluster will pick (page_codec.cpp, same arithmetic): the smallest one from
-// `min_shift` whose cells hold the cluster's extent in 16 bits and its grid origin in int32.
-// Returns kMaxPositionShift + 1 when none does (the encoder then refuses the cluster).
-uint32_t requiredShift(std::span<const glm::vec3> positions, double step, uint32_t min_shift) {
-  double lo[3], hi[3];
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::numeric_limits<double>::max();
-    hi[a] = -std::numeric_limits<double>::max();
-  }
-  for (const glm::vec3& p : positions)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], double(p[a]));
-      hi[a] = std::max(hi[a], double(p[a]));
-    }
-  for (uint32_t shift = min_shift; shift <= pkg::kMaxPositionShift; ++shift) {
-    const double cell = std::ldexp(step, int(shift));
-    bool fits = true;
-    for (int a = 0; a < 3 && fits; ++a) {
-      double glo = std::nearbyint(lo[a] / cell), ghi = std::nearbyint(hi[a] / cell);
-      fits = glo >= -2147483648.0 && glo <= 2147483647.0 && ghi - glo <= 65535.0;
-    }
-    if (fits) return shift;
-  }
-  return kTooCoarse;
-}
 
 void snapPositions(std::span<const glm::vec3> in, std::span<const uint32_t> local,
                    const std::vector<uint32_t>& vertex_shift, double step,
@@ -218,7 +193,7 @@ void QuantizationSnapper::solve(uint32_t piece, const SnapPiece& input, bool kee
   std::vector<uint8_t> initial(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 64), [&](const auto& range) {
     for (size_t c = range.begin(); c != range.end(); ++c)
-      initial[c] = uint8_t(requiredShift(input.clusters[c].positions, step_m_, 0));
+      initial[c] = uint8_t(clusterPositionShift(input.clusters[c].positions, step_m_, 0));
   });
   std::vector<uint8_t> shifts = state.solved ? state.shifts : initial;
   if (shifts.size() != n)
@@ -232,7 +207,7 @@ void QuantizationSnapper::solve(uint32_t piece, const SnapPiece& input, bool kee
       std::vector<glm::vec3> snapped;
       for (size_t c = range.begin(); c != range.end(); ++c) {
         snapPositions(input.clusters[c].positions, w.of(c), vertex_shift, step_m_, snapped);
-        const uint32_t shift = requiredShift(snapped, step_m_, shifts[c]);
+        const uint32_t shift = clusterPositionShift(snapped, step_m_, shifts[c]);
         if (shift > pkg::kMaxPositionShift) continue;  // the encoder reports it
         if (shift != shifts[c]) {
           shifts[c] = uint8_t(shift);

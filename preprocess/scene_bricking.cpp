@@ -426,8 +426,12 @@ class BrickingSink : public SceneSink {
 
   void addMesh(const TriangleMesh& mesh, const Transform& t, uint32_t dense) {
     relative_.resize(mesh.positions.size());
-    for (size_t i = 0; i < mesh.positions.size(); ++i)
+    const double step = options_.position_step_m;
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
       relative_[i] = t.apply(mesh.positions[i]) - scene_.origin;
+      if (step > 0.0 && std::isfinite(relative_[i].x + relative_[i].y + relative_[i].z))
+        relative_[i] = glm::round(relative_[i] / step) * step;
+    }
     const size_t n = mesh.indices.size() / 3 * 3;
     for (size_t i = 0; i < n; i += 3) {
       TriangleRecord record;

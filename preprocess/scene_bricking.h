@@ -47,6 +47,11 @@ struct BrickingOptions {
   // in-memory build needs a few hundred bytes per triangle).
   uint64_t max_brick_triangles = 0;
   float nurbs_tolerance = kDefaultChordalTolerance;  // chordal, scene units
+  // Triangle vertices are stored on this grid (metres, relative to the origin; 0: as computed).
+  // The package's base position step: vertices of touching parts that differ by float noise (a
+  // pipe's end and its elbow's, one ulp apart) become one position, so a brick's DAG and the
+  // brick seams see them as one vertex, as the package will store them (grid_weld.h).
+  double position_step_m = 0.0;
   Progress* progress = nullptr;
 };
 

@@ -162,6 +162,10 @@ class EdgeCounter {
     for (size_t i = 0; i < m.indices.size(); i += 3)
       add(m.positions[m.indices[i]], m.positions[m.indices[i + 1]], m.positions[m.indices[i + 2]]);
   }
+  uint32_t count(glm::vec3 a, glm::vec3 b) const {
+    auto it = counts_.find(key(welder_.id(a), welder_.id(b)));
+    return it == counts_.end() ? 0 : it->second;
+  }
   std::unordered_set<uint64_t> boundary() const {
     std::unordered_set<uint64_t> out;
     for (const auto& [e, n] : counts_)
@@ -380,6 +384,64 @@ TEST(DagMerge, LockKeepsOpenComponentsOutOfTheFallbacks) {
     ASSERT_FALSE(roots.empty());
     root.addCut(free, roots);
     EXPECT_LT(root.boundary().size(), open.size()) << "fallback " << fallback;
+  }
+}
+
+// A seam edge is locked whatever its count in this brick: a non-manifold edge (three plates of a
+// bracket meeting on a line) used three times here and once in the neighbouring brick is where
+// the two bricks meet. Small brackets are exactly what the drop and sloppy fallbacks take.
+TEST(DagMerge, NonManifoldSeamEdgesAreLockedWhateverTheirCount) {
+  Mesh m;
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> size(0.05f, 0.2f);
+  std::vector<std::pair<glm::vec3, glm::vec3>> seam;
+  std::uniform_real_distribution<float> where(1.0f, 20.0f);
+  for (uint32_t b = 0; b < 3000; ++b) {
+    // Three fins of 2x2 quads on a segment along x; one bracket in ten sits on the seam, the
+    // line y = z = 0, the others elsewhere.
+    const bool on_seam = b % 10 == 0;
+    const glm::vec3 base = on_seam ? glm::vec3(0.5f * float(b / 10), 0, 0)
+                                   : glm::vec3(where(rng), where(rng), where(rng));
+    const float length = 0.3f, reach = size(rng);
+    const glm::vec3 out[3] = {{0, reach, 0}, {0, 0, reach}, {0, -reach, 0}};
+    if (on_seam) {
+      seam.push_back({base, base + glm::vec3(0.5f * length, 0, 0)});
+      seam.push_back({base + glm::vec3(0.5f * length, 0, 0), base + glm::vec3(length, 0, 0)});
+    }
+    for (const glm::vec3& o : out) {
+      const uint32_t first = uint32_t(m.positions.size());
+      for (int j = 0; j <= 2; ++j)
+        for (int i = 0; i <= 2; ++i)
+          m.positions.push_back(base + glm::vec3(length * 0.5f * float(i), 0, 0) +
+                                o * (0.5f * float(j)));
+      for (int j = 0; j < 2; ++j)
+        for (int i = 0; i < 2; ++i) {
+          const uint32_t a = first + uint32_t(3 * j + i), c = a + 3;
+          m.indices.insert(m.indices.end(), {a, a + 1, c + 1, a, c + 1, c});
+          m.ids.insert(m.ids.end(), {b, b});
+        }
+    }
+  }
+  Welder welder;
+  EdgeCounter input(welder);
+  input.addMesh(m);
+  for (const auto& [a, b] : seam) ASSERT_EQ(input.count(a, b), 3u);
+
+  DagOptions options;
+  options.lock_open_boundaries = true;
+  options.is_seam_edge = [](const glm::vec3& a, const glm::vec3& b) {
+    return a.y == 0.0f && a.z == 0.0f && b.y == 0.0f && b.z == 0.0f;
+  };
+  options.max_root_triangles = 4096;  // force the fallbacks to work hard
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  ASSERT_GT(dag.levelCount(), 2u);
+  EXPECT_LT(dag.root_triangles, m.triangles() / 4);
+  for (float tau : thresholds(dag, 20)) {
+    EdgeCounter cut(welder);
+    cut.addCut(dag, tw::selectCut(dag, tau));
+    size_t moved = 0;
+    for (const auto& [a, b] : seam) moved += cut.count(a, b) != 3u;
+    EXPECT_EQ(moved, 0u) << "tau " << tau;
   }
 }
 
