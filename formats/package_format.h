@@ -9,6 +9,8 @@
 //   1.0 (2026-11) first version: flat cluster DAG (Nanite-style: each cluster carries its own and
 //       its parent group's error), groups, pages of meshopt-encoded clusters with optional zstd,
 //       parametric instances, objects, layers, string pool, empty visibility section.
+//   1.1 (2026-11) the visibility section filled: view cells with occluder sets and sampled
+//       visible sets (visibility_section.h). 1.0 packages (empty section) stay valid.
 #pragma once
 
 #include <bit>
@@ -23,7 +25,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 0;
+inline constexpr uint32_t kMinorVersion = 1;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -64,7 +66,7 @@ enum class SectionType : uint32_t {
   Objects = 5,     // ObjectRecord[]
   Layers = 6,      // LayerRecord[]
   Strings = 7,     // UTF-8 string pool, no terminators
-  Visibility = 8,  // reserved for view cells and occluder sets; empty in 1.0
+  Visibility = 8,  // view cells and occluder sets (visibility_section.h); may be empty
   PageData = 9,    // stored (maybe compressed) pages, addressed by PageRecord
 };
 inline constexpr uint32_t kSectionCount = 10;

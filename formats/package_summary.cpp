@@ -87,6 +87,37 @@ PackageSummary summarizePackage(const PackageView& view) {
     ++s.layers[o.layer].objects;
     if (o.db_key_bytes > 0) ++s.objects_with_db_key;
   }
+
+  const VisibilityView& vis = view.visibilityCells();
+  PackageSummary::Visibility& v = s.visibility;
+  v.bytes = view.section(pkg::SectionType::Visibility).bytes;
+  if (!vis.empty()) {
+    const pkg::VisibilityHeader& vh = vis.header();
+    v.present = true;
+    v.cells = vh.cell_count;
+    v.solid_cells = vh.solid_cells;
+    v.grid_dims = glm::uvec3(vh.grid_dims[0], vh.grid_dims[1], vh.grid_dims[2]);
+    v.grid_min = glm::dvec3(vh.grid_min[0], vh.grid_min[1], vh.grid_min[2]);
+    v.cell_size_m = vh.cell_size_m;
+    v.rays_cast = vh.rays_cast;
+    v.rays_per_cell = vh.rays_per_cell;
+    v.candidate_level = vh.candidate_level;
+    v.candidate_triangles = vh.candidate_triangles;
+    v.visible_sets = (vh.flags & pkg::kVisibleSetsPresent) != 0;
+    v.occluder_ids = vh.occluder_id_count;
+    v.visible_ids = vh.visible_id_count;
+    v.average_occluders = vis.averageOccluders();
+    uint64_t visible = 0;
+    double coverage = 0.0;
+    for (const pkg::VisibilityCellRecord& c : vis.cells()) {
+      visible += c.visible_count;
+      coverage += c.occluder_coverage;
+    }
+    if (v.cells) {
+      v.average_visible = double(visible) / double(v.cells);
+      v.average_coverage = coverage / double(v.cells);
+    }
+  }
   return s;
 }
 

@@ -60,6 +60,26 @@ struct PackageSummary {
   };
   std::vector<Layer> layers;
 
+  // The visibility section (visibility_section.h); present == false when it is empty.
+  struct Visibility {
+    bool present = false;
+    uint64_t bytes = 0;  // the section's size
+    uint64_t cells = 0;  // stored (free) cells
+    uint64_t solid_cells = 0;
+    glm::uvec3 grid_dims{0};
+    glm::dvec3 grid_min{0.0};  // package frame, metres
+    double cell_size_m = 0.0;
+    uint64_t rays_cast = 0;
+    uint32_t rays_per_cell = 0;
+    uint32_t candidate_level = 0;
+    uint64_t candidate_triangles = 0;
+    bool visible_sets = false;
+    uint64_t occluder_ids = 0, visible_ids = 0;
+    double average_occluders = 0.0;  // per stored cell
+    double average_visible = 0.0;    // per stored cell (0 without visible sets)
+    double average_coverage = 0.0;   // mean fraction of a cell's rays its occluders take
+  } visibility;
+
   // File bytes per level-0 (input) triangle; 0 when there are none.
   double bytesPerInputTriangle() const {
     return total_triangles ? double(file_bytes) / double(total_triangles) : 0.0;

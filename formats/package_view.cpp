@@ -105,6 +105,7 @@ PackageView& PackageView::operator=(PackageView&& other) noexcept {
     layers_ = other.layers_;
     strings_ = other.strings_;
     visibility_ = other.visibility_;
+    visibility_cells_ = std::exchange(other.visibility_cells_, VisibilityView());
     page_data_ = other.page_data_;
   }
   return *this;
@@ -386,7 +387,29 @@ void PackageView::validate(Verify verify) {
     }
   }
 
+  validateVisibility();
   if (verify == Verify::All) verifyAll();
+}
+
+void PackageView::validateVisibility() {
+  const SectionEntry& e = sections_[static_cast<uint32_t>(SectionType::Visibility)];
+  visibility_cells_ = VisibilityView::parse(visibility_, name_, e.offset, clusters_.size());
+  if (visibility_cells_.empty()) return;
+  const VisibilityHeader& v = visibility_cells_.header();
+  if (v.candidate_level >= header_->level_count)
+    fail(offsetOf(&v.candidate_level), "visibility: candidate level " + str(v.candidate_level) +
+                                           " >= level count " + str(header_->level_count));
+  // Candidates are drawn as meshes (occluders) and mapped through the DAG (visible sets).
+  auto checkMesh = [&](std::span<const uint32_t> ids, const char* what) {
+    for (const uint32_t& id : ids)
+      if (clusters_[id].kind != static_cast<uint8_t>(ClusterKind::Mesh))
+        fail(offsetOf(&id), std::string("visibility: ") + what + " id " + str(id) +
+                                " is not a mesh cluster");
+  };
+  for (const VisibilityCellRecord& c : visibility_cells_.cells()) {
+    checkMesh(visibility_cells_.occluders(c), "occluder");
+    checkMesh(visibility_cells_.visible(c), "visible");
+  }
 }
 
 void PackageView::verifyAll() {

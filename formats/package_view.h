@@ -4,8 +4,9 @@
 // sizes, header checksum, the section table (aligned, inside the file, non-overlapping, sizes
 // matching record counts), the checksum of every table section, and every cross-reference
 // (cluster -> group, page and object range; page -> page data; object -> layer and strings;
-// instance -> object and profile points; layer -> strings) plus the LOD invariants. After a
-// successful open the spans below are safe to index with any index the records contain.
+// instance -> object and profile points; layer -> strings) plus the LOD invariants, and the
+// visibility section when there is one (visibility_section.h; its ids must be mesh clusters).
+// After a successful open the spans below are safe to index with any index the records contain.
 //
 // Verify::Headers (the default) leaves the page data unread, so opening a package of many GB costs
 // a pass over its tables only; each page's checksum is then checked by readPage when it is loaded.
@@ -28,6 +29,7 @@
 #include "format_error.h"
 #include "package_format.h"
 #include "page_codec.h"
+#include "visibility_section.h"
 
 namespace tw {
 
@@ -69,6 +71,9 @@ class PackageView {
   std::span<const pkg::LayerRecord> layers() const { return layers_; }
   std::string_view strings() const { return strings_; }
   std::span<const uint8_t> visibility() const { return visibility_; }
+  // The visibility section, validated at open (ids are mesh clusters of this package, the
+  // candidate level is below level_count); empty() when the package has none.
+  const VisibilityView& visibilityCells() const { return visibility_cells_; }
 
   // Strings of validated records (offsets were checked at open).
   std::string_view objectName(uint32_t object) const;
@@ -92,6 +97,7 @@ class PackageView {
   PackageView() = default;
   void validate(Verify verify);
   void verifyAll();
+  void validateVisibility();
   [[noreturn]] void fail(uint64_t offset, const std::string& reason) const;
   uint64_t offsetOf(const void* p) const {
     return static_cast<uint64_t>(static_cast<const uint8_t*>(p) - data_);
@@ -112,6 +118,7 @@ class PackageView {
   std::span<const pkg::LayerRecord> layers_;
   std::string_view strings_;
   std::span<const uint8_t> visibility_;
+  VisibilityView visibility_cells_;  // spans into the mapping, which a move does not relocate
   std::span<const uint8_t> page_data_;
 };
 

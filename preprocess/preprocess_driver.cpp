@@ -16,10 +16,13 @@
 #include "dag_merge.h"
 #include "dag_serialization.h"
 #include "package_assembly.h"
+#include "package_rewrite.h"
+#include "package_view.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "quantization_snap.h"
 #include "scene_bricking.h"
+#include "visibility_build.h"
 
 namespace tw {
 namespace {
@@ -129,6 +132,39 @@ void addLevels(std::vector<uint64_t>& triangles_per_level, const ClusterDag& dag
     if (triangles_per_level.size() <= c.level) triangles_per_level.resize(c.level + 1, 0);
     triangles_per_level[c.level] += c.triangleCount();
   }
+}
+
+// Builds the visibility section of the package at `path` and stores it there.
+VisibilitySummary addVisibility(const std::filesystem::path& path,
+                                const PreprocessOptions& options) {
+  VisibilityBuildOptions build;
+  build.cells.cell_size_m = options.view_cell_size_m;
+  build.sampling.rays_per_cell = options.visibility_rays;
+  build.progress = options.progress;
+  VisibilityBuildReport built;
+  std::vector<uint8_t> bytes;
+  {
+    const PackageView view = PackageView::open(path);
+    bytes = buildVisibilitySection(view, build, &built);
+  }
+  VisibilitySummary summary;
+  summary.ran = true;
+  summary.candidate_level = built.candidate_level;
+  summary.candidate_triangles = built.candidate_triangles;
+  summary.cell_size_m = built.cell_size_m;
+  summary.free_cells = built.free_cells;
+  summary.solid_cells = built.solid_cells;
+  summary.rays = built.rays;
+  summary.average_occluders = built.average_occluders;
+  summary.average_visible = built.average_visible;
+  summary.section_bytes = bytes.size();
+  summary.rays_per_second = built.sampling_s > 0 ? double(built.rays) / built.sampling_s : 0.0;
+  summary.decode_s = built.decode_s;
+  summary.voxelize_s = built.voxelize_s;
+  summary.embree_build_s = built.embree_build_s;
+  summary.sampling_s = built.sampling_s;
+  if (!bytes.empty()) replacePackageSection(path, pkg::SectionType::Visibility, bytes);
+  return summary;
 }
 
 }  // namespace
@@ -368,12 +404,25 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   report.parametric_clusters = addParametricClusters(items, clustering, storage).size();
   endStage(progress);
 
-  // 5. One file, written atomically.
+  // 5. One file, written atomically; with visibility, first inside the work directory, so the
+  // final name only ever holds a finished package.
   clock.start("write");
   beginStage(progress, "write package", 0);
-  PackageWriteStats written = writePackage(storage, options.output);
+  const std::filesystem::path written_path =
+      options.visibility ? bricking.work_dir / "package.twk" : options.output;
+  PackageWriteStats written = writePackage(storage, written_path);
   storage = PackageStorage{};
   endStage(progress);
+  report.package_bytes = written.file_bytes;
+  throwIfCancelled(progress);
+
+  // 6. Visibility, from the written package; its section replaces the empty one.
+  if (options.visibility) {
+    clock.start("visibility");
+    report.visibility = addVisibility(written_path, options);
+    std::filesystem::rename(written_path, options.output);
+    report.package_bytes = std::filesystem::file_size(options.output);
+  }
   clock.stop();
   // Snapping ran inside "build bricks" and "pack": shown apart, the stages still sum to the run.
   for (StageTime& stage : report.stages) {
@@ -385,7 +434,6 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
       report.stages.insert(report.stages.begin() + i, {"snap", snap_in_build + snap_in_pack});
       break;
     }
-  report.package_bytes = written.file_bytes;
   if (!options.keep_work_dir) removeWorkDir(bricking.work_dir);
   report.peak_rss_bytes = peakRssBytes();
   report.seconds = std::chrono::duration<double>(Clock::now() - run_start).count();

@@ -33,6 +33,28 @@ struct PreprocessOptions {
   bool resume = false;
   bool keep_work_dir = false;    // for inspection and tests
   Progress* progress = nullptr;  // cancelled() is polled between bricks
+  // View cells and occluder sets. Off by default here, so library callers (tests building
+  // small packages) pay nothing unless they ask; `terawalk preprocess` turns it on unless
+  // `--visibility off`.
+  bool visibility = false;
+  uint32_t visibility_rays = 1024;  // rays per view cell
+  double view_cell_size_m = 0.0;    // 0: chosen from the bounds (view_cells.h)
+};
+
+// What the visibility stage built (all zero when it was off or found no mesh clusters).
+struct VisibilitySummary {
+  bool ran = false;
+  uint32_t candidate_level = 0;
+  uint64_t candidate_triangles = 0;
+  double cell_size_m = 0.0;
+  uint32_t free_cells = 0;
+  uint32_t solid_cells = 0;
+  uint64_t rays = 0;
+  double average_occluders = 0.0;
+  double average_visible = 0.0;
+  uint64_t section_bytes = 0;
+  double rays_per_second = 0.0;  // over the sampling step alone
+  double decode_s = 0.0, voxelize_s = 0.0, embree_build_s = 0.0, sampling_s = 0.0;
 };
 
 struct StageTime {
@@ -57,6 +79,7 @@ struct PreprocessReport {
   uint64_t clusters = 0;
   uint64_t parametric_clusters = 0;
   uint64_t package_bytes = 0;
+  VisibilitySummary visibility;
   uint64_t peak_rss_bytes = 0;
   double seconds = 0.0;
 };

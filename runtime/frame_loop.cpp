@@ -70,6 +70,8 @@ Walkthrough::Walkthrough(const std::filesystem::path& package, const Walkthrough
   renderer_options.height = options_.height;
   renderer_ = std::make_unique<GlRenderer>(renderer_options);
   renderer_->setObjectColors(objectColors(*view_));
+  culler_ = std::make_unique<OcclusionCuller>(*view_);
+  culler_->setHzbOptions(options_.hzb);
 
   // The only wait of the run: the pinned pages, so the first frame shows the whole model.
   pager_->pin(pinned);
@@ -103,6 +105,26 @@ glm::dvec3 Walkthrough::worldMax() const {
 
 void Walkthrough::uploadReady(FrameStats& stats) {
   for (const PageUpload& upload : pager_->takeUploads()) stats.bytes_uploaded += pool_->upload(upload);
+}
+
+void Walkthrough::setOcclusion(OcclusionMode mode) {
+  if (mode != options_.occlusion) culler_->resetVisible();
+  options_.occlusion = mode;
+}
+
+void Walkthrough::appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
+                              std::vector<DrawItem>& items) const {
+  for (uint32_t c : clusters) items.push_back(makeDrawItem(pager_->gpuCluster(c), eye));
+}
+
+uint64_t Walkthrough::redrawUnculled() {
+  items_.clear();
+  appendItems(full_order_, last_eye_, items_);
+  renderer_->beginFrame(last_rotation_, last_projection_);
+  renderer_->draw(*pool_, items_);
+  const RenderStats render_stats = renderer_->endFrame();
+  glFinish();
+  return render_stats.triangles;
 }
 
 void Walkthrough::adaptTau(double frame_ms) {
@@ -139,6 +161,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     CutOptions cut_options;
     cut_options.tau_px = tau_px_;
     cut_options.min_feature_px = options_.min_feature_px;
+    cut_options.frustum_cull = options_.frustum_cull;
     auto resident = [this](uint32_t page) { return pager_->resident(page); };
     cut_->select(cut_view, cut_options, resident, cut_result_);
     for (const PageWant& want : cut_result_.wanted) pager_->request(want.page, want.priority);
@@ -170,23 +193,47 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   last_position_ = camera.position;
   last_time_s_ = time_s;
 
+  // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
+  for (uint32_t c : *draw_list) pager_->touch(view_->clusters()[c].page);
+  const OcclusionMode mode = options_.reference ? OcclusionMode::Off : options_.occlusion;
+  last_eye_ = eye;
+  last_rotation_ = glm::mat4(camera.viewRotation());
+  last_projection_ = glm::mat4(camera.projection(aspect));
+  renderer_->beginFrame(last_rotation_, last_projection_);
   // Draw items in double: offset of each cluster's grid origin from the eye.
   items_.clear();
-  items_.reserve(draw_list->size());
-  for (uint32_t c : *draw_list) {
-    const pkg::ClusterRecord& record = view_->clusters()[c];
-    pager_->touch(record.page);
-    DrawItem item;
-    item.placement = pager_->gpuCluster(c);
-    const glm::dvec3 grid_origin_m = glm::dvec3(item.placement.grid_origin) * item.placement.cell_m;
-    item.offset_eye = glm::vec3(grid_origin_m - eye);
-    items_.push_back(item);
-    stats.triangles_drawn += item.placement.triangle_count;
+  if (mode == OcclusionMode::Hzb) {
+    OcclusionFrame frame;
+    frame.renderer = renderer_.get();
+    frame.pool = pool_.get();
+    frame.pager = pager_.get();
+    frame.eye = eye;
+    frame.view_projection = last_projection_ * last_rotation_;  // as the renderer multiplies
+    stats.view_cell = -1;
+    culler_->splitByLastVisible(eye, *draw_list, pass1_, rest_, stats);
+    appendItems(pass1_, eye, items_);
+    renderer_->draw(*pool_, items_);
+    culler_->cullRest(frame, rest_, pass2_, stats);
+    const size_t pass1_items = items_.size();
+    appendItems(pass2_, eye, items_);
+    renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(pass1_items));
+    culler_->recordVisible(frame, pass1_, pass2_, stats);
+    stats.pass1_clusters = uint32_t(pass1_.size());
+    stats.pass2_clusters = uint32_t(pass2_.size());
+    full_order_.assign(pass1_.begin(), pass1_.end());
+    full_order_.insert(full_order_.end(), rest_.begin(), rest_.end());
+  } else {
+    const std::vector<uint32_t>* list = draw_list;
+    if (mode == OcclusionMode::Pvs) {
+      culler_->filterPvs(eye, *draw_list, drawn_, stats);
+      list = &drawn_;
+    }
+    appendItems(*list, eye, items_);
+    renderer_->draw(*pool_, items_);
+    full_order_.assign(draw_list->begin(), draw_list->end());
   }
+  for (const DrawItem& item : items_) stats.triangles_drawn += item.placement.triangle_count;
   stats.nodes_drawn = uint32_t(items_.size());
-
-  renderer_->beginFrame(glm::mat4(camera.viewRotation()), glm::mat4(camera.projection(aspect)));
-  renderer_->draw(*pool_, items_);
   const RenderStats render_stats = renderer_->endFrame();
   // Headless runs wait for the GPU anyway, so they report this frame's own GPU time; the window
   // takes the newest finished one (a frame or two old) rather than stall.

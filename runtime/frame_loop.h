@@ -6,9 +6,11 @@
 // per-frame cap; select the cut for the camera (frustum, screen-space error tau, small features,
 // resident ancestors standing in for missing pages) and request the missing pages by priority;
 // prefetch along the camera's velocity (a second, draw-less cut from where the camera will be);
-// draw the cut with one multi-draw; adapt tau to --target-fps. Nothing here waits for I/O except
-// the constructor, which loads the root pages once (a few, whatever the model size) so the first
-// frame is never empty.
+// cull the cut by occlusion (mode hzb: view-cell occluders and two-pass hierarchical Z; pvs: the
+// cell's sampled visible set; runtime/occlusion_culler.h) and draw it with multi-draws; adapt tau
+// to --target-fps. Nothing here waits for I/O except the constructor, which loads the root pages
+// once (a few, whatever the model size) so the first frame is never empty. (hzb waits for the
+// GPU: it reads the pyramid back in the middle of the frame.)
 #pragma once
 
 #include <filesystem>
@@ -19,6 +21,7 @@
 #include "frame_stats.h"
 #include "gl_renderer.h"
 #include "lod_cut.h"
+#include "occlusion_culler.h"
 #include "package_view.h"
 #include "pager.h"
 
@@ -31,6 +34,9 @@ struct WalkthroughOptions {
   double min_feature_px = 1.0;
   PagerOptions pager;
   bool reference = false;        // brute force: every level-0 cluster, no LOD, no culling
+  bool frustum_cull = true;      // false: LOD alone (benchmarks separate each technique's share)
+  OcclusionMode occlusion = OcclusionMode::Hzb;  // never applied in reference mode
+  HzbOptions hzb;
   bool prefetch = true;          // along the camera's velocity
   double prefetch_ahead_s = 0.5;
   double target_fps = 0.0;       // > 0: adapt tau to hold this frame rate
@@ -54,6 +60,19 @@ class Walkthrough {
   // drives the velocity estimate for prefetching.
   FrameStats renderFrame(const Camera& camera, double time_s);
 
+  // Draws the last frame's whole cut again into the same targets with the same camera and no
+  // occlusion culling, in the order the frame drew (hzb: last frame's visible clusters first,
+  // then the rest in cut order), so depth ties resolve alike and the id buffer then differs from
+  // the culled frame's only where culling removed visible pixels (`--check-occlusion`). Uploads
+  // nothing and leaves the cut, the pager and the visible set alone; blocks until drawn. Returns
+  // the triangles drawn.
+  uint64_t redrawUnculled();
+
+  OcclusionMode occlusion() const { return options_.occlusion; }
+  // Switches the mode; the next hzb frame starts with no previous visible set.
+  void setOcclusion(OcclusionMode mode);
+  const OcclusionCuller& occlusionCuller() const { return *culler_; }
+
   const PackageView& package() const { return *view_; }
   GlRenderer& renderer() { return *renderer_; }
   Pager& pager() { return *pager_; }
@@ -66,6 +85,9 @@ class Walkthrough {
 
  private:
   void uploadReady(FrameStats& stats);
+  // Appends one draw item per cluster (resident, from the cut) seen from `eye`.
+  void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
+                   std::vector<DrawItem>& items) const;
   void adaptTau(double frame_ms);
 
   WalkthroughOptions options_;
@@ -77,6 +99,11 @@ class Walkthrough {
   std::vector<uint32_t> reference_clusters_;
   CutResult cut_result_, prefetch_result_;
   std::vector<DrawItem> items_;
+  std::unique_ptr<OcclusionCuller> culler_;
+  std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
+  std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn
+  glm::dvec3 last_eye_{0.0};          // package frame
+  glm::mat4 last_rotation_{1.0f}, last_projection_{1.0f};
   double tau_px_ = 1.0;
   uint64_t frame_ = 0;
   std::optional<glm::dvec3> last_position_;

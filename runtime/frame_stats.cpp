@@ -13,6 +13,11 @@ namespace tw {
 
 namespace {
 
+// A share far below 1e-4 (lost pixels): printed with significant digits, not 4 decimals.
+struct SmallShare {
+  double value;
+};
+
 // One table of the fields, so CSV, JSON and their order never drift apart.
 template <typename Visit>
 void visitFields(const FrameStats& s, Visit visit) {
@@ -37,6 +42,23 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("gpu_bytes_used", s.gpu_bytes_used);
   visit("host_bytes_used", s.host_bytes_used);
   visit("rss_bytes", s.rss_bytes);
+  visit("occlusion_culled", s.occlusion_culled);
+  visit("occluders_drawn", s.occluders_drawn);
+  visit("pass1_clusters", s.pass1_clusters);
+  visit("pass2_clusters", s.pass2_clusters);
+  visit("hzb_build_ms", s.hzb_build_ms);
+  visit("hzb_test_ms", s.hzb_test_ms);
+  visit("view_cell", s.view_cell);
+  visit("occlusion_lost_px", s.occlusion_lost_px);
+  visit("occlusion_lost_share", SmallShare{s.occlusion_lost_share});
+  visit("occlusion_lost_depth_px", s.occlusion_lost_depth_px);
+}
+
+void to_json(nlohmann::json& j, SmallShare v) { j = v.value; }
+std::string formatValue(SmallShare v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6g", v.value);
+  return text;
 }
 
 std::string formatValue(double v) {

@@ -32,6 +32,21 @@ struct FrameStats {
   uint64_t gpu_bytes_used = 0;
   uint64_t host_bytes_used = 0;
   uint64_t rss_bytes = 0;
+  // Occlusion (runtime/occlusion_culler.h; zero or -1 in mode off and in the reference).
+  uint32_t occlusion_culled = 0;  // clusters of the cut not drawn because of occlusion
+  uint32_t occluders_drawn = 0;   // hzb: view-cell occluder clusters drawn into the HZB depth
+  uint32_t pass1_clusters = 0;    // hzb: clusters drawn first (visible last frame)
+  uint32_t pass2_clusters = 0;    // hzb: clusters drawn after the HZB test
+  double hzb_build_ms = 0.0;      // hzb: both pyramid builds and read-backs
+  double hzb_test_ms = 0.0;       // hzb: CPU box tests of both passes
+  int64_t view_cell = -1;         // grid index of the eye's stored view cell, -1 for none
+  // `terawalk render --check-occlusion`: pixels whose object id differs from the same cut drawn
+  // without occlusion culling, and their share of the image; -1 when not checked. The depth
+  // variant also counts pixels whose depth differs (same id): a model made of one object (an
+  // all-mesh PLY) shows a loss only there.
+  int64_t occlusion_lost_px = -1;
+  double occlusion_lost_share = -1.0;
+  int64_t occlusion_lost_depth_px = -1;  // id or depth differs
 };
 
 // Resident set size of this process now, from /proc/self/statm (0 if unavailable).

@@ -42,7 +42,7 @@ GLuint compileShader(GLenum stage, const std::string& source, const char* name) 
   return shader;
 }
 
-GLuint linkProgram(GLuint vertex, GLuint fragment) {
+GLuint linkProgram(GLuint vertex, GLuint fragment, const char* name) {
   GLuint program = glCreateProgram();
   glAttachShader(program, vertex);
   glAttachShader(program, fragment);
@@ -57,9 +57,29 @@ GLuint linkProgram(GLuint vertex, GLuint fragment) {
     std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
     glGetProgramInfoLog(program, length, nullptr, log.data());
     glDeleteProgram(program);
-    throw std::runtime_error(std::string("GlRenderer: cannot link the mesh program: ") +
-                             log.c_str());
+    throw std::runtime_error(std::string("GlRenderer: cannot link the ") + name +
+                             " program: " + log.c_str());
   }
+  return program;
+}
+
+// Compiles and links one program; nothing is left behind when a step throws (~Impl releases the
+// programs already built).
+GLuint buildProgram(const std::string& vertex_source, const std::string& fragment_source,
+                    const char* name) {
+  GLuint vertex = 0, fragment = 0, program = 0;
+  const std::string n(name);
+  try {
+    vertex = compileShader(GL_VERTEX_SHADER, vertex_source, (n + " vertex").c_str());
+    fragment = compileShader(GL_FRAGMENT_SHADER, fragment_source, (n + " fragment").c_str());
+    program = linkProgram(vertex, fragment, name);
+  } catch (...) {
+    glDeleteShader(vertex);
+    glDeleteShader(fragment);
+    throw;
+  }
+  glDeleteShader(vertex);
+  glDeleteShader(fragment);
   return program;
 }
 
@@ -74,6 +94,7 @@ struct GlRenderer::Impl {
   RendererOptions options;
   GLuint fbo = 0, color = 0, ids = 0, depth = 0;
   GLuint program = 0;
+  GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
   uint32_t object_color_count = 0;
 
@@ -189,6 +210,7 @@ struct GlRenderer::Impl {
     glDeleteBuffers(1, &draw_data_buffer);
     glDeleteBuffers(1, &color_buffer);
     glDeleteProgram(program);
+    glDeleteProgram(depth_program);
     deleteTargets();
   }
 
@@ -207,18 +229,9 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
   while (glGetError() != GL_NO_ERROR) {
   }  // errors left by others must not be blamed on us
   s.createTargets(options.width, options.height);
-  GLuint vertex = 0, fragment = 0;
-  try {
-    vertex = compileShader(GL_VERTEX_SHADER, gl::meshVertexShader(), "mesh vertex");
-    fragment = compileShader(GL_FRAGMENT_SHADER, gl::meshFragmentShader(), "mesh fragment");
-    s.program = linkProgram(vertex, fragment);
-  } catch (...) {
-    glDeleteShader(vertex);
-    glDeleteShader(fragment);
-    throw;  // ~Impl releases the rest
-  }
-  glDeleteShader(vertex);
-  glDeleteShader(fragment);
+  s.program = buildProgram(gl::meshVertexShader(), gl::meshFragmentShader(), "mesh");
+  s.depth_program =
+      buildProgram(gl::occluderVertexShader(), gl::occluderFragmentShader(), "occluder");
   glCreateBuffers(1, &s.indirect_buffer);
   glCreateBuffers(1, &s.draw_data_buffer);
   glCreateBuffers(1, &s.color_buffer);
@@ -284,14 +297,19 @@ void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& pro
   const glm::mat4 view_projection = projection * view_rotation;
   glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
                             &view_projection[0][0]);
+  glProgramUniformMatrix4fv(s.depth_program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                            &view_projection[0][0]);
 }
 
-void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items) {
+// Builds the indirect commands and per-draw records of `items` into the scratch vectors and
+// uploads them; returns the triangles. Checks every range first, so a bad item throws before
+// anything reaches the GPU.
+uint64_t GlRenderer::prepareDraws(const GeometryPool& pool, std::span<const DrawItem> items) {
   Impl& s = *impl_;
   const PoolLayout& layout = pool.layout();
   s.commands.clear();
   s.draw_data.clear();
-  uint64_t triangles = 0;  // counted into the frame only once every item has been checked
+  uint64_t triangles = 0;
   for (size_t i = 0; i < items.size(); ++i) {
     const GpuCluster& c = items[i].placement;
     if (c.triangle_count == 0) continue;
@@ -317,13 +335,11 @@ void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items)
     d.offset_eye = items[i].offset_eye;
     d.cell_m = static_cast<float>(c.cell_m);
     d.first_triangle = static_cast<uint32_t>(c.first_triangle);
+    d.push_m = std::max(items[i].push_m, 0.0f);
     s.draw_data.push_back(d);
     triangles += c.triangle_count;
   }
-  if (s.commands.empty()) return;
-  s.frame.draws += static_cast<uint32_t>(s.commands.size());
-  s.frame.triangles += triangles;
-
+  if (s.commands.empty()) return 0;
   // Re-specified (orphaned) on every call, so a call never waits for the previous one's reads.
   glNamedBufferData(s.indirect_buffer,
                     static_cast<GLsizeiptr>(s.commands.size() * sizeof(s.commands[0])),
@@ -331,6 +347,15 @@ void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items)
   glNamedBufferData(s.draw_data_buffer,
                     static_cast<GLsizeiptr>(s.draw_data.size() * sizeof(s.draw_data[0])),
                     s.draw_data.data(), GL_STREAM_DRAW);
+  return triangles;
+}
+
+void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items) {
+  Impl& s = *impl_;
+  const uint64_t triangles = prepareDraws(pool, items);  // counted only once all were checked
+  if (s.commands.empty()) return;
+  s.frame.draws += static_cast<uint32_t>(s.commands.size());
+  s.frame.triangles += triangles;
 
   s.bindTargetState();
   glEnable(GL_DEPTH_TEST);
@@ -355,6 +380,34 @@ void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items)
   glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
   glBindVertexArray(0);
   glUseProgram(0);
+}
+
+uint64_t GlRenderer::drawDepth(const GeometryPool& pool, std::span<const DrawItem> items,
+                               unsigned framebuffer) {
+  Impl& s = *impl_;
+  const uint64_t triangles = prepareDraws(pool, items);
+  if (s.commands.empty()) return 0;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, s.options.width, s.options.height);
+  glDisable(GL_SCISSOR_TEST);
+  glColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glDepthMask(GL_TRUE);
+  glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);  // an occluder hides from both sides
+  glUseProgram(s.depth_program);
+  glBindVertexArray(pool.vertexArray());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kDrawDataBinding, s.draw_data_buffer);
+  glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
+  glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, nullptr,
+                              static_cast<GLsizei>(s.commands.size()), 0);
+  glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  return triangles;
 }
 
 RenderStats GlRenderer::endFrame() {
@@ -412,6 +465,15 @@ void GlRenderer::readObjectIds(std::vector<uint32_t>& ids, bool flip_y) const {
   prepareRead(s.fbo, GL_COLOR_ATTACHMENT1);
   glReadPixels(0, 0, w, h, GL_RED_INTEGER, GL_UNSIGNED_INT, ids.data());
   if (flip_y) flipRows(ids, static_cast<size_t>(w), h);
+}
+
+void GlRenderer::readDepth(std::vector<float>& depth, bool flip_y) const {
+  const Impl& s = *impl_;
+  const int w = s.options.width, h = s.options.height;
+  depth.resize(static_cast<size_t>(w) * h);
+  prepareRead(s.fbo, GL_COLOR_ATTACHMENT0);  // depth reads ignore the read buffer
+  glReadPixels(0, 0, w, h, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());
+  if (flip_y) flipRows(depth, static_cast<size_t>(w), h);
 }
 
 void GlRenderer::blitToScreen(int screen_width, int screen_height) const {

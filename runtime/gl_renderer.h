@@ -30,7 +30,17 @@ namespace tw {
 struct DrawItem {
   GpuCluster placement;
   glm::vec3 offset_eye{0.0f};  // (grid_origin * cell_m) + origin - eye, world metres, in double then rounded
+  float push_m = 0.0f;  // drawDepth only: metres each vertex moves away from the eye (>= 0)
 };
+
+// The item for a resident cluster's placement seen from `eye` (package frame, metres): the grid
+// origin's offset from the eye is computed in double, then rounded.
+inline DrawItem makeDrawItem(const GpuCluster& placement, const glm::dvec3& eye) {
+  DrawItem item;
+  item.placement = placement;
+  item.offset_eye = glm::vec3(glm::dvec3(placement.grid_origin) * placement.cell_m - eye);
+  return item;
+}
 
 struct RendererOptions {
   int width = 1280;
@@ -69,6 +79,13 @@ class GlRenderer {
   // are skipped. Throws std::out_of_range, drawing nothing, when an item's ranges lie outside the
   // pool's layout.
   void draw(const GeometryPool& pool, std::span<const DrawItem> items);
+  // Depth only, for occlusion: draws `items` into `framebuffer` (which must have a 32-bit float
+  // depth attachment of the renderer's size, and may have no colour) with the camera of the last
+  // beginFrame, depth test GL_GREATER and depth writes on, each vertex pushed away from the eye by
+  // its item's push_m. Counts nothing into the frame's draws or triangles; returns the triangles
+  // drawn. Same checks and exceptions as draw().
+  uint64_t drawDepth(const GeometryPool& pool, std::span<const DrawItem> items,
+                     unsigned framebuffer);
   // Ends the frame (timer query) and waits for nothing: gpu_ms is that of the newest frame whose
   // query has finished (usually one or two frames old), 0 before any has.
   RenderStats endFrame();
@@ -81,6 +98,8 @@ class GlRenderer {
   // flip_y is false; top-down (image order) when true.
   void readColor(std::vector<uint8_t>& rgba, bool flip_y = true) const;
   void readObjectIds(std::vector<uint32_t>& ids, bool flip_y = true) const;
+  // Reversed-Z depth (1 near, 0 far and background), same row order rules.
+  void readDepth(std::vector<float>& depth, bool flip_y = true) const;
   // Copies the colour to the default framebuffer (windowed mode) at its size.
   void blitToScreen(int screen_width, int screen_height) const;
 
@@ -89,6 +108,8 @@ class GlRenderer {
   unsigned depthTexture() const;  // GL_DEPTH_COMPONENT32F, reversed Z (1 near, 0 far/empty)
 
  private:
+  uint64_t prepareDraws(const GeometryPool& pool, std::span<const DrawItem> items);
+
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };

@@ -1,5 +1,5 @@
-// GLSL of the mesh pass, embedded as C++ raw strings, and the one GPU-visible struct it shares
-// with the C++ side.
+// GLSL of the mesh pass and of the depth-only occluder pass, embedded as C++ raw strings, and the
+// one GPU-visible struct they share with the C++ side.
 //
 // Why here and not in .glsl files: a header needs no build step, and the per-draw struct is
 // written once (kDrawDataFields) and expanded both as a C++ struct and as GLSL text, so the two
@@ -24,12 +24,13 @@ inline constexpr int kViewProjectionLocation = 0;  // mat4: projection * view ro
 inline constexpr int kObjectColorCountLocation = 1;  // uint: entries in the colour buffer
 
 // The per-draw record. std430: vec3 aligns to 16 and is followed by a float in the same 16 bytes;
-// the array stride is 32, which the padding makes equal to sizeof on the C++ side.
+// the array stride is 32, which the padding makes equal to sizeof on the C++ side. push_m is read
+// by the depth-only occluder pass only (metres each vertex moves away from the eye).
 #define TW_GPU_DRAW_DATA_FIELDS \
   vec3 offset_eye;              \
   float cell_m;                 \
   uint first_triangle;          \
-  uint reserved0;               \
+  float push_m;                 \
   uint reserved1;               \
   uint reserved2;
 #define TW_GL_STRINGIFY_(...) #__VA_ARGS__
@@ -44,7 +45,8 @@ struct GpuDrawData {
 }  // namespace glsl_types
 using GpuDrawData = glsl_types::GpuDrawData;
 static_assert(sizeof(GpuDrawData) == 32 && offsetof(GpuDrawData, cell_m) == 12 &&
-                  offsetof(GpuDrawData, first_triangle) == 16,
+                  offsetof(GpuDrawData, first_triangle) == 16 &&
+                  offsetof(GpuDrawData, push_m) == 20,
               "GpuDrawData must match the std430 layout of the GLSL struct");
 
 // GL's indirect command for glMultiDrawElementsIndirect (fixed by the GL spec).
@@ -115,6 +117,36 @@ void main() {
   out_color = vec4(min(base.rgb * light, vec3(1.0)), 1.0);
   out_id = object + 1u;
 }
+)";
+}
+
+// The occluder pass: depth only, each vertex pushed away from the eye by its draw's push_m, so a
+// coarse occluder lies behind the true surface it stands for (the push is the cluster's
+// object-space error plus its quantization error). A vertex at the eye is left where it is.
+inline std::string occluderVertexShader() {
+  return std::string(R"(#version 450 core
+#extension GL_ARB_shader_draw_parameters : require
+layout(location = 0) in uvec3 q;
+struct GpuDrawData {
+)") + TW_GL_STRINGIFY(TW_GPU_DRAW_DATA_FIELDS) +
+         R"(
+};
+layout(std430, binding = 0) readonly buffer DrawDataBuffer { GpuDrawData draws[]; };
+layout(location = 0) uniform mat4 view_projection;
+void main() {
+  GpuDrawData d = draws[gl_DrawIDARB];
+  vec3 p = d.offset_eye + vec3(q) * d.cell_m;
+  float len = length(p);
+  if (len > 0.0) p += p * (d.push_m / len);
+  gl_Position = view_projection * vec4(p, 1.0);
+}
+)";
+}
+
+// Depth only: no colour attachments are written; the fragment stage just lets depth through.
+inline std::string occluderFragmentShader() {
+  return R"(#version 450 core
+void main() {}
 )";
 }
 

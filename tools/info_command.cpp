@@ -172,6 +172,24 @@ nlohmann::json packageToJson(const PackageSummary& s) {
     layers.push_back({{"name", layer.name}, {"objects", layer.objects},
                       {"color_rgba", layer.color_rgba}});
   j["layers"] = layers;
+  const PackageSummary::Visibility& v = s.visibility;
+  j["visibility"] = {{"present", v.present},
+                     {"bytes", v.bytes},
+                     {"cells", v.cells},
+                     {"solid_cells", v.solid_cells},
+                     {"grid_dims", {v.grid_dims.x, v.grid_dims.y, v.grid_dims.z}},
+                     {"grid_min", {v.grid_min.x, v.grid_min.y, v.grid_min.z}},
+                     {"cell_size_m", v.cell_size_m},
+                     {"rays_cast", v.rays_cast},
+                     {"rays_per_cell", v.rays_per_cell},
+                     {"candidate_level", v.candidate_level},
+                     {"candidate_triangles", v.candidate_triangles},
+                     {"visible_sets", v.visible_sets},
+                     {"occluder_ids", v.occluder_ids},
+                     {"visible_ids", v.visible_ids},
+                     {"average_occluders", v.average_occluders},
+                     {"average_visible", v.average_visible},
+                     {"average_coverage", v.average_coverage}};
   return j;
 }
 
@@ -229,6 +247,21 @@ void printPackage(const PackageSummary& s, double seconds) {
   std::printf("layers      %zu\n", s.layers.size());
   for (const auto& layer : s.layers)
     std::printf("  %-24s %10llu objects\n", layer.name.c_str(), ull(layer.objects));
+  const PackageSummary::Visibility& v = s.visibility;
+  if (!v.present) {
+    std::printf("visibility  none\n");
+  } else {
+    std::printf("visibility  %llu cells (%llu solid) in a %u x %u x %u grid of %.3g m cells, %s\n",
+                ull(v.cells), ull(v.solid_cells), v.grid_dims.x, v.grid_dims.y, v.grid_dims.z,
+                v.cell_size_m, mib(v.bytes).c_str());
+    std::printf("  rays %llu (%u per cell); candidates: level %u front, %llu triangles\n",
+                ull(v.rays_cast), v.rays_per_cell, v.candidate_level, ull(v.candidate_triangles));
+    std::printf("  occluders %.2f per cell (covering %.1f%% of rays)", v.average_occluders,
+                100.0 * v.average_coverage);
+    if (v.visible_sets)
+      std::printf("; visible set %.1f per cell", v.average_visible);
+    std::printf("\n");
+  }
   std::printf("read in     %.2f s\n", seconds);
 }
 

@@ -20,6 +20,9 @@ struct PreprocessArgs {
   uint64_t brick_triangles = 0;
   bool resume = false;
   bool keep_work = false;
+  std::string visibility = "on";
+  uint32_t visibility_rays = 1024;
+  double view_cell_size_m = 0.0;
 };
 
 void printSummary(const PreprocessReport& r, const std::string& output) {
@@ -39,6 +42,19 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
   for (const StageTime& s : r.stages) std::printf("  %-12s%8.2f s\n", s.name.c_str(), s.seconds);
   std::printf("  total       %8.2f s, %.2f M input triangles/s\n", r.seconds,
               r.seconds > 0 ? double(r.input_triangles) / r.seconds / 1e6 : 0.0);
+  if (r.visibility.ran) {
+    const VisibilitySummary& v = r.visibility;
+    std::printf("  visibility  %u cells free, %u solid (%.2f m), %llu rays (%.1f M rays/s)\n",
+                v.free_cells, v.solid_cells, v.cell_size_m, static_cast<unsigned long long>(v.rays),
+                v.rays_per_second / 1e6);
+    std::printf("              candidates level %u, %llu triangles; occluders %.1f, visible %.1f"
+                " per cell; section %llu bytes\n",
+                v.candidate_level, static_cast<unsigned long long>(v.candidate_triangles),
+                v.average_occluders, v.average_visible,
+                static_cast<unsigned long long>(v.section_bytes));
+    std::printf("              decode %.2f s, cells %.2f s, embree %.2f s, rays %.2f s\n",
+                v.decode_s, v.voxelize_s, v.embree_build_s, v.sampling_s);
+  }
   std::printf("  peak memory %.1f MiB\n", double(r.peak_rss_bytes) / (1024.0 * 1024.0));
   std::printf("  package     %llu bytes, %.2f bytes per input triangle\n",
               static_cast<unsigned long long>(r.package_bytes),
@@ -64,6 +80,14 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--resume", args->resume,
                 "Continue a killed run with the same arguments from its finished bricks");
   cmd->add_flag("--keep-work", args->keep_work, "Keep the work directory <output>.work");
+  cmd->add_option("--visibility", args->visibility,
+                  "View cells and occluder sets: on or off (default on)")
+      ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option("--visibility-rays", args->visibility_rays, "Rays per view cell (default 1024)")
+      ->check(CLI::Range(1u, 1u << 20));
+  cmd->add_option("--view-cell-size", args->view_cell_size_m,
+                  "View cell edge in metres (default: chosen from the model's size)")
+      ->check(CLI::Range(0.0, 1e6));
   cmd->callback([args, &global] {
     auto progress = makeCommandProgress(global);
     PreprocessOptions options;
@@ -76,6 +100,9 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.resume = args->resume;
     options.keep_work_dir = args->keep_work;
     options.progress = progress.get();
+    options.visibility = args->visibility == "on";
+    options.visibility_rays = args->visibility_rays;
+    options.view_cell_size_m = args->view_cell_size_m;
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);
   });

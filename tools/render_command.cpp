@@ -2,7 +2,10 @@
 // generated orbit or fly-through) through EGL surfaceless (Mesa llvmpipe without a GPU), writes
 // per-frame statistics as CSV and JSON, PNG frames and object-id frames when asked, and prints a
 // summary. `--reference` draws every full-resolution triangle with no LOD and no culling: the
-// brute-force baseline that `terawalk compare` measures fidelity against.
+// brute-force baseline that `terawalk compare` measures fidelity against. `--occlusion` picks the
+// occlusion culling (off, hzb, pvs); `--check-occlusion` draws every frame's cut a second time
+// without occlusion culling and counts the pixels whose object id differs (the loss culling
+// caused, exact, at the same LOD).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -44,6 +47,14 @@ struct RenderArgs {
   uint32_t evict_after = 30;
   bool reference = false;
   bool no_prefetch = false;
+  bool no_frustum = false;
+  std::string occlusion = "hzb";
+  bool check_occlusion = false;
+  int hzb_read_width = kMaxTestLevelWidthPx;
+  bool hzb_final_rebuild = true;
+  std::string occluders = "seed";
+  std::string hzb_build = "auto";
+  int hzb_span = HzbOptions{}.test_span_texels;
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -83,6 +94,13 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.target_fps = args.target_fps;
   options.reference = args.reference;
   options.prefetch = !args.no_prefetch;
+  options.frustum_cull = !args.no_frustum;
+  options.occlusion = parseOcclusionMode(args.occlusion);
+  options.hzb.read_width_px = args.hzb_read_width;
+  options.hzb.rebuild_from_final_depth = args.hzb_final_rebuild;
+  options.hzb.build = parseHzbBuild(args.hzb_build);
+  options.hzb.test_span_texels = args.hzb_span;
+  options.hzb.occluders = parseOccluders(args.occluders);
   options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
   options.pager.host_budget_bytes = parseByteSize(args.host_budget, "--host-budget");
   options.pager.upload_bytes_per_frame = static_cast<uint64_t>(args.upload_mb * 1024 * 1024);
@@ -113,7 +131,9 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   std::vector<FrameStats> all;
   all.reserve(frames);
   std::vector<uint8_t> rgba;
-  std::vector<uint32_t> ids;
+  std::vector<uint32_t> ids, culled_ids, unculled_ids;
+  std::vector<float> culled_depth, unculled_depth;
+  uint64_t lost_px_total = 0, checked_px_total = 0, lost_depth_px_total = 0;
   double first_frame_ms = 0.0;
   const double t0 = path.keys.front().time_s;
   for (int i = 0; i < frames; ++i) {
@@ -122,16 +142,41 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
     if (i == 0)
       first_frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
+    if (args.check_occlusion) {
+      walk.renderer().readObjectIds(culled_ids, false);
+      walk.renderer().readDepth(culled_depth, false);
+      walk.redrawUnculled();
+      walk.renderer().readObjectIds(unculled_ids, false);
+      walk.renderer().readDepth(unculled_depth, false);
+      uint64_t lost = 0, lost_depth = 0;
+      for (size_t p = 0; p < culled_ids.size(); ++p) {
+        const bool id_differs = culled_ids[p] != unculled_ids[p];
+        lost += id_differs;
+        lost_depth += id_differs || culled_depth[p] != unculled_depth[p];
+      }
+      stats.occlusion_lost_px = int64_t(lost);
+      stats.occlusion_lost_depth_px = int64_t(lost_depth);
+      lost_depth_px_total += lost_depth;
+      stats.occlusion_lost_share = culled_ids.empty() ? 0.0 : double(lost) / culled_ids.size();
+      lost_px_total += lost;
+      checked_px_total += culled_ids.size();
+    }
     all.push_back(stats);
     if (!global.quiet && (i % 30 == 0 || i + 1 == frames))
       std::fprintf(stderr, "render: frame %d/%d  %.1f ms  %llu triangles\n", i + 1, frames,
                    stats.frame_ms, static_cast<unsigned long long>(stats.triangles_drawn));
   }
 
-  uint64_t peak_rss = 0, fallback_frames = 0;
+  uint64_t peak_rss = 0, fallback_frames = 0, occlusion_culled_total = 0, cell_frames = 0;
+  uint64_t lossy_frames = 0;
+  double max_lost_share = 0.0;
   for (const FrameStats& f : all) {
     peak_rss = std::max(peak_rss, f.rss_bytes);
     fallback_frames += f.ancestor_fallbacks > 0;
+    occlusion_culled_total += f.occlusion_culled;
+    cell_frames += f.view_cell >= 0;
+    lossy_frames += f.occlusion_lost_px > 0;
+    max_lost_share = std::max(max_lost_share, f.occlusion_lost_share);
   }
   nlohmann::json summary = {
       {"package", args.file},
@@ -152,11 +197,45 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
                            return a.triangles_drawn < b.triangles_drawn;
                          })->triangles_drawn},
       {"frames_with_ancestor_fallback", fallback_frames},
+      {"occlusion", args.reference ? "off" : args.occlusion},
+      {"hzb_read_width_px", args.hzb_read_width},
+      {"hzb_final_rebuild", args.hzb_final_rebuild},
+      {"hzb_build", args.hzb_build},
+      {"hzb_span_texels", args.hzb_span},
+      {"occluders", args.occluders},
+      {"occlusion_culled_total", occlusion_culled_total},
+      {"median_occlusion_culled",
+       medianOf(all, [](const FrameStats& f) { return f.occlusion_culled; })},
+      {"median_pass1_clusters", medianOf(all, [](const FrameStats& f) { return f.pass1_clusters; })},
+      {"median_pass2_clusters", medianOf(all, [](const FrameStats& f) { return f.pass2_clusters; })},
+      {"median_occluders_drawn",
+       medianOf(all, [](const FrameStats& f) { return f.occluders_drawn; })},
+      {"median_hzb_build_ms", medianOf(all, [](const FrameStats& f) { return f.hzb_build_ms; })},
+      {"median_hzb_test_ms", medianOf(all, [](const FrameStats& f) { return f.hzb_test_ms; })},
+      {"frames_in_view_cell", cell_frames},
       {"peak_rss_bytes", peak_rss},
       {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
       {"host_budget_bytes", options.pager.host_budget_bytes},
       {"renderer", context.renderer()},
   };
+  if (args.check_occlusion) {
+    const double share = checked_px_total ? double(lost_px_total) / double(checked_px_total) : 0.0;
+    summary["occlusion_lost_px_total"] = lost_px_total;
+    summary["occlusion_checked_px_total"] = checked_px_total;
+    summary["occlusion_lost_share"] = share;
+    summary["occlusion_max_frame_lost_share"] = max_lost_share;
+    summary["occlusion_frames_with_loss"] = lossy_frames;
+    summary["occlusion_lost_depth_px_total"] = lost_depth_px_total;
+    summary["occlusion_lost_depth_share"] =
+        checked_px_total ? double(lost_depth_px_total) / double(checked_px_total) : 0.0;
+    std::fprintf(stderr,
+                 "render: occlusion %s lost %llu of %llu pixels (%.6f%%) over %d frames; "
+                 "worst frame %.6f%%, %llu frames with loss; id or depth differs: %llu pixels\n",
+                 args.occlusion.c_str(), static_cast<unsigned long long>(lost_px_total),
+                 static_cast<unsigned long long>(checked_px_total), 100.0 * share, frames,
+                 100.0 * max_lost_share, static_cast<unsigned long long>(lossy_frames),
+                 static_cast<unsigned long long>(lost_depth_px_total));
+  }
   if (!out_dir.empty()) {
     writeFrameStatsCsv(all, out_dir / "frames.csv");
     writeFrameStatsJson(all, out_dir / "frames.json");
@@ -206,6 +285,32 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--reference", args->reference,
                 "Brute force: every full-resolution triangle, no LOD, no culling");
   cmd->add_flag("--no-prefetch", args->no_prefetch, "Do not prefetch along the camera's velocity");
+  cmd->add_flag("--no-frustum", args->no_frustum,
+                "No frustum culling: LOD alone (benchmarks measure each technique's share)");
+  cmd->add_option("--occlusion", args->occlusion,
+                  "Occlusion culling: off, hzb (view-cell occluders + two-pass HZB), pvs "
+                  "(sampled visible sets)")
+      ->check(CLI::IsMember({"off", "hzb", "pvs"}))
+      ->capture_default_str();
+  cmd->add_option("--hzb-read-width", args->hzb_read_width,
+                  "hzb: read the pyramid back from the first level at most this wide, pixels")
+      ->check(CLI::Range(1, 1 << 16))
+      ->capture_default_str();
+  cmd->add_option("--hzb-build", args->hzb_build,
+                  "Where the HZB is built: auto (CPU on llvmpipe), gpu (compute shader), cpu")
+      ->capture_default_str();
+  cmd->add_option("--hzb-span", args->hzb_span,
+                  "Texels per axis a box may cover at its HZB test level (finer: more culled)")
+      ->capture_default_str();
+  cmd->add_option("--occluders", args->occluders,
+                  "Use of the view cell's occluder set in hzb mode: seed (pass 1 when nothing was "
+                  "visible before), always, coarse (own LOD, pushed back; not conservative), none")
+      ->capture_default_str();
+  cmd->add_flag("--hzb-final-rebuild,!--no-hzb-final-rebuild", args->hzb_final_rebuild,
+                "hzb: next frame's visible set from a second pyramid of the final depth (default)");
+  cmd->add_flag("--check-occlusion", args->check_occlusion,
+                "Draw each frame's cut again without occlusion culling and count the pixels "
+                "whose object id differs (occlusion_lost_px)");
   cmd->callback([args, &global] { runRender(*args, global); });
 }
 

@@ -4,7 +4,8 @@
 // wheel scales the speed, which starts from the model's size), an orbit mode (O) around the
 // model's centre, a screenshot key (F12), a camera-path recorder (R starts and stops; the path is
 // written in the documented text format) and replay (--path). An ImGui overlay shows the frame
-// statistics and sets tau, field of view, near/far and the small-feature threshold at run time.
+// statistics and sets tau, field of view, near/far, the small-feature threshold and the occlusion
+// mode (off, hzb, pvs; --occlusion picks the first) at run time.
 // The same Walkthrough as `terawalk render` draws every frame.
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
@@ -39,6 +40,7 @@ struct ViewArgs {
   double target_fps = 0.0;
   int frames = 0;  // > 0: quit after this many frames (scripted runs, tests)
   std::string screenshot;  // with --frames: write the last frame here
+  std::string occlusion = "hzb";
 };
 
 struct GlfwSession {
@@ -131,6 +133,7 @@ void runView(const ViewArgs& args) {
     options.tau_px = args.tau_px;
     options.target_fps = args.target_fps;
     options.finish_each_frame = false;
+    options.occlusion = parseOcclusionMode(args.occlusion);
     options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
     Walkthrough walk(args.file, options);
 
@@ -158,6 +161,7 @@ void runView(const ViewArgs& args) {
     float fov_deg = float(glm::degrees(camera.fov_y_rad));
     float near_m = float(camera.near_m), far_m = float(camera.far_m);
     float min_feature = 1.0f;
+    int occlusion_mode = static_cast<int>(options.occlusion);
     int shot = 0;
     bool key_latch[512] = {};
     auto pressed = [&](int key) {
@@ -211,6 +215,7 @@ void runView(const ViewArgs& args) {
         walk.renderer().resize(fb_w, fb_h);
       if (options.target_fps <= 0.0) walk.setTau(tau);
       walk.setMinFeaturePx(min_feature);
+      walk.setOcclusion(static_cast<OcclusionMode>(occlusion_mode));
       stats = walk.renderFrame(camera, t);
       tau = float(walk.tau());
 
@@ -235,6 +240,10 @@ void runView(const ViewArgs& args) {
                   stats.pages_requested, stats.pages_loaded, stats.ancestor_fallbacks);
       ImGui::Text("GPU pool %.0f MiB   RSS %.0f MiB", stats.gpu_bytes_used / 1048576.0,
                   stats.rss_bytes / 1048576.0);
+      ImGui::Text("occlusion culled %u   pass1 %u  pass2 %u   occluders %u   cell %lld",
+                  stats.occlusion_culled, stats.pass1_clusters, stats.pass2_clusters,
+                  stats.occluders_drawn, static_cast<long long>(stats.view_cell));
+      ImGui::Text("HZB build %.2f ms   test %.2f ms", stats.hzb_build_ms, stats.hzb_test_ms);
       if (stats.parametric_skipped > 0)
         ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
                            stats.parametric_skipped);
@@ -243,6 +252,10 @@ void runView(const ViewArgs& args) {
       ImGui::SliderFloat("near (m)", &near_m, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
       ImGui::SliderFloat("far (m)", &far_m, 100.0f, 1e6f, "%.0f", ImGuiSliderFlags_Logarithmic);
       ImGui::SliderFloat("min feature (px)", &min_feature, 0.0f, 8.0f, "%.1f");
+      static_assert(int(OcclusionMode::Off) == 0 && int(OcclusionMode::Hzb) == 1 &&
+                    int(OcclusionMode::Pvs) == 2, "the combo lists the modes in enum order");
+      const char* const occlusion_names[] = {"off", "hzb", "pvs"};
+      ImGui::Combo("occlusion", &occlusion_mode, occlusion_names, 3);
       ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
                   nav.orbit ? "orbit" : "walk", nav.speed_mps, recording_on ? " (on)" : "");
       ImGui::End();
@@ -281,6 +294,9 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--target-fps", args->target_fps, "Adapt tau to hold this frame rate");
   cmd->add_option("--frames", args->frames, "Quit after this many frames (scripted runs)");
   cmd->add_option("--screenshot", args->screenshot, "With --frames: save the last frame here");
+  cmd->add_option("--occlusion", args->occlusion, "Occlusion culling at start: off, hzb, pvs")
+      ->check(CLI::IsMember({"off", "hzb", "pvs"}))
+      ->capture_default_str();
   cmd->callback([args] { runView(*args); });
 }
 

@@ -1,0 +1,74 @@
+// A hierarchical-Z pyramid on the CPU, and the conservative test of a node's bounds against it.
+//
+// Depth is reversed Z (camera.h): 1 at the near plane, 0 at infinity, 0 where nothing was drawn.
+// Level 0 has the depth buffer's size; each texel of level k + 1 holds the minimum (farthest)
+// of the level-k texels it covers, 2x2 of them, or 3 along an axis whose level-k size is odd (the
+// last texel also takes the odd row/column), so every texel bounds every pixel under it. Sizes
+// halve (rounding down, at least 1) until 1x1.
+//
+// The GPU builds the same pyramid (hzb_builder.h) and reads back the levels the test needs; the
+// CPU builder here is the reference for tests and a fallback.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace tw {
+
+// A box's footprint on screen: pixel rectangle (inclusive, clamped to the viewport) and the
+// reversed-Z depth of its nearest point.
+struct ScreenFootprint {
+  glm::ivec2 min_px{0}, max_px{-1};
+  float nearest_depth = 1.0f;  // reversed Z: the largest depth of any point of the box
+  bool visible_for_sure = false;  // crosses the near plane or covers the eye: never culled
+  bool offscreen = false;         // entirely outside the viewport
+};
+
+// Projects the box [box_min, box_max] (eye-relative metres, i.e. world minus eye, in double then
+// rounded) with `view_projection` (rotation-only view times the reversed-Z projection of
+// camera.h) onto a width x height viewport. Conservative: the rectangle covers every pixel the
+// box could touch (corners projected, then rounded outward by one pixel).
+ScreenFootprint projectBox(const glm::vec3& box_min, const glm::vec3& box_max,
+                           const glm::mat4& view_projection, int width, int height);
+
+class HzbPyramid {
+ public:
+  HzbPyramid() = default;
+
+  // Builds every level from a full-resolution depth image (row 0 = bottom row, as GL reads).
+  // Throws std::invalid_argument when depth.size() != width * height or a size is < 1.
+  static HzbPyramid fromDepth(std::span<const float> depth, int width, int height);
+
+  // The level-0 size, the number of levels and each level's size.
+  int width() const { return width_; }
+  int height() const { return height_; }
+  int levelCount() const { return int(levels_.size()); }
+  glm::ivec2 levelSize(int level) const;
+  // Level data, row-major, row 0 at the bottom. Levels below firstLevel() are absent (a GPU
+  // read-back may skip the large ones); their data() is empty.
+  std::span<const float> level(int level) const;
+  int firstLevel() const { return first_level_; }
+
+  // For the GPU read-back: sets the level sizes for a width x height depth buffer and keeps room
+  // for levels [first_level, levelCount()); fill them through mutableLevel.
+  void reset(int width, int height, int first_level);
+  std::span<float> mutableLevel(int level);
+
+  // True only when the footprint is certainly hidden: every pyramid texel under its rectangle, at
+  // the finest available level where the rectangle spans at most max_span_texels texels per axis
+  // (rounded down to a power of two), is nearer (strictly greater depth) than the footprint's
+  // nearest depth. A larger span tests at a finer level: more texels read, fewer far texels
+  // mixed in, more culled. False for visible_for_sure, for an empty pyramid and for offscreen
+  // footprints (the caller culls those by frustum).
+  bool occluded(const ScreenFootprint& footprint, int max_span_texels = 4) const;
+
+ private:
+  int width_ = 0, height_ = 0, first_level_ = 0;
+  std::vector<glm::ivec2> sizes_;
+  std::vector<std::vector<float>> levels_;
+};
+
+}  // namespace tw
