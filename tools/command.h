@@ -28,5 +28,6 @@ void registerVerifyCommand(CLI::App& app, const GlobalOptions& global);
 void registerRenderCommand(CLI::App& app, const GlobalOptions& global);
 void registerViewCommand(CLI::App& app, const GlobalOptions& global);
 void registerCompareCommand(CLI::App& app, const GlobalOptions& global);
+void registerBenchCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

@@ -9,7 +9,7 @@ packages=(
   libtbb-dev libglfw3-dev libglm-dev libbenchmark-dev libgtest-dev
   libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0
   libzstd-dev libxxhash-dev libmetis-dev libsqlite3-dev libcli11-dev nlohmann-json3-dev
-  libstb-dev libtinygltf-dev libimgui-dev xvfb
+  libstb-dev libtinygltf-dev libimgui-dev xvfb gnuplot-nox
 )
 
 missing=()

@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   tw::registerRenderCommand(app, global);
   tw::registerViewCommand(app, global);
   tw::registerCompareCommand(app, global);
+  tw::registerBenchCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
