@@ -45,7 +45,7 @@ print(f"plant {tris} (tessellated), {first['frames']} frames per run, {runs} run
       f"{first['renderer']}, {first['width']}x{first['height']}")
 keys = ["median_frame_ms", "median_gpu_ms", "median_triangles", "median_occlusion_culled",
         "median_hzb_build_ms", "median_hzb_test_ms", "occlusion_lost_share",
-        "max_frame_occlusion_lost_share"]
+        "occlusion_max_frame_lost_share"]
 for key in keys:
     print(f"  {key:32s} " + "  ".join(f"{m} {med(rows, key):14.6g}" for m, rows in modes.items()))
 for m in ["hzb", "pvs"]:

@@ -31,6 +31,9 @@ $tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" --azimuth 210 --ele
 $tw snapshot "$out/plant.tws" --out "$out/plant-inside.png" --eye 36,-16,13.7 --target 60,-10,13 \
   --fov 70 | tee -a "$out/snapshot.txt"
 
+# A quick run of the benchmark suite (small plants, every runtime mode, plots): out/bench/report.md.
+$tw -q bench --quick --out "$out/bench" --cache "$out/bench-cache" | tee "$out/bench.txt"
+
 {
   echo "# TeraWalk main job report"
   echo
@@ -49,5 +52,7 @@ $tw snapshot "$out/plant.tws" --out "$out/plant-inside.png" --eye 36,-16,13.7 --
   echo "## Snapshot"; echo; echo '```'; cat "$out/snapshot.txt"; echo '```'
   echo; echo "![outside](plant-outside.png)"
   echo; echo "![inside a deck](plant-inside.png)"
+  echo "## Benchmark suite (terawalk bench --quick)"; echo
+  echo "Tables, plots and sample frames: [bench/report.md](bench/report.md)."
 } > "$out/report.md"
 echo "Report written to $out/report.md"
