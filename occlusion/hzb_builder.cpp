@@ -11,6 +11,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "gl_program.h"
+
 namespace tw {
 namespace {
 
@@ -91,43 +93,11 @@ void main() {
 }
 )";
 
-std::string infoLog(GLuint object, bool is_program) {
-  GLint length = 0;
-  if (is_program) glGetProgramiv(object, GL_INFO_LOG_LENGTH, &length);
-  else glGetShaderiv(object, GL_INFO_LOG_LENGTH, &length);
-  std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
-  if (is_program) glGetProgramInfoLog(object, length, nullptr, log.data());
-  else glGetShaderInfoLog(object, length, nullptr, log.data());
-  return log.c_str();
-}
-
 GLuint buildProgram() {
   const std::string source = "#version 450\nlayout(local_size_x = " + std::to_string(kGroupSize) +
                              ", local_size_y = " + std::to_string(kGroupSize) + ") in;" +
                              kShaderBody;
-  GLuint shader = glCreateShader(GL_COMPUTE_SHADER);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    const std::string log = infoLog(shader, false);
-    glDeleteShader(shader);
-    throw std::runtime_error("HzbBuilder: cannot compile the reduction shader: " + log);
-  }
-  GLuint program = glCreateProgram();
-  glAttachShader(program, shader);
-  glLinkProgram(program);
-  glDetachShader(program, shader);
-  glDeleteShader(shader);
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    const std::string log = infoLog(program, true);
-    glDeleteProgram(program);
-    throw std::runtime_error("HzbBuilder: cannot link the reduction program: " + log);
-  }
-  return program;
+  return buildGlProgram({{GL_COMPUTE_SHADER, source}}, "HzbBuilder: reduction");
 }
 
 int levelCountFor(int width, int height) {

@@ -149,12 +149,21 @@ HzbPyramid HzbPyramid::fromDepth(std::span<const float> depth, int width, int he
                                 " depth values for a " + std::to_string(width) + "x" +
                                 std::to_string(height) + " image");
   HzbPyramid pyramid;
-  pyramid.reset(width, height, 0);
-  std::copy(depth.begin(), depth.end(), pyramid.levels_[0].begin());
-  for (int k = 1; k < pyramid.levelCount(); ++k)
-    reduceLevel(pyramid.levels_[size_t(k) - 1], pyramid.sizes_[size_t(k) - 1],
-                pyramid.levels_[size_t(k)], pyramid.sizes_[size_t(k)]);
+  pyramid.build(depth, width, height);
   return pyramid;
+}
+
+void HzbPyramid::build(std::span<const float> depth, int width, int height) {
+  checkSize(width, height, "HzbPyramid::build");
+  if (depth.size() != size_t(width) * size_t(height))
+    throw std::invalid_argument("HzbPyramid::build: " + std::to_string(depth.size()) +
+                                " depth values for a " + std::to_string(width) + "x" +
+                                std::to_string(height) + " image");
+  reset(width, height, 0);  // keeps the levels' storage: no allocation frame after frame
+  std::copy(depth.begin(), depth.end(), levels_[0].begin());
+  for (int k = 1; k < levelCount(); ++k)
+    reduceLevel(levels_[size_t(k) - 1], sizes_[size_t(k) - 1], levels_[size_t(k)],
+                sizes_[size_t(k)]);
 }
 
 glm::ivec2 HzbPyramid::levelSize(int level) const {

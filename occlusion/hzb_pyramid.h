@@ -41,6 +41,8 @@ class HzbPyramid {
   // Builds every level from a full-resolution depth image (row 0 = bottom row, as GL reads).
   // Throws std::invalid_argument when depth.size() != width * height or a size is < 1.
   static HzbPyramid fromDepth(std::span<const float> depth, int width, int height);
+  // The same into this pyramid, reusing its storage (the frame loop rebuilds it every frame).
+  void build(std::span<const float> depth, int width, int height);
 
   // The level-0 size, the number of levels and each level's size.
   int width() const { return width_; }

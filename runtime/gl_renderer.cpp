@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "gl_program.h"
 #include "gl_shaders.h"
 
 namespace tw {
@@ -23,64 +24,12 @@ namespace {
 // slots mean endFrame never has to wait.
 constexpr int kQueryRing = 4;
 
-GLuint compileShader(GLenum stage, const std::string& source, const char* name) {
-  GLuint shader = glCreateShader(stage);
-  const char* text = source.c_str();
-  glShaderSource(shader, 1, &text, nullptr);
-  glCompileShader(shader);
-  GLint ok = GL_FALSE;
-  glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetShaderiv(shader, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
-    glGetShaderInfoLog(shader, length, nullptr, log.data());
-    glDeleteShader(shader);
-    throw std::runtime_error(std::string("GlRenderer: cannot compile the ") + name +
-                             " shader: " + log.c_str());
-  }
-  return shader;
-}
-
-GLuint linkProgram(GLuint vertex, GLuint fragment, const char* name) {
-  GLuint program = glCreateProgram();
-  glAttachShader(program, vertex);
-  glAttachShader(program, fragment);
-  glLinkProgram(program);
-  glDetachShader(program, vertex);
-  glDetachShader(program, fragment);
-  GLint ok = GL_FALSE;
-  glGetProgramiv(program, GL_LINK_STATUS, &ok);
-  if (!ok) {
-    GLint length = 0;
-    glGetProgramiv(program, GL_INFO_LOG_LENGTH, &length);
-    std::string log(static_cast<size_t>(std::max(length, 1)), '\0');
-    glGetProgramInfoLog(program, length, nullptr, log.data());
-    glDeleteProgram(program);
-    throw std::runtime_error(std::string("GlRenderer: cannot link the ") + name +
-                             " program: " + log.c_str());
-  }
-  return program;
-}
-
-// Compiles and links one program; nothing is left behind when a step throws (~Impl releases the
-// programs already built).
+// Compiles and links one vertex + fragment program (gl_program.h: nothing is left behind when a
+// step throws; ~Impl releases the programs already built).
 GLuint buildProgram(const std::string& vertex_source, const std::string& fragment_source,
                     const char* name) {
-  GLuint vertex = 0, fragment = 0, program = 0;
-  const std::string n(name);
-  try {
-    vertex = compileShader(GL_VERTEX_SHADER, vertex_source, (n + " vertex").c_str());
-    fragment = compileShader(GL_FRAGMENT_SHADER, fragment_source, (n + " fragment").c_str());
-    program = linkProgram(vertex, fragment, name);
-  } catch (...) {
-    glDeleteShader(vertex);
-    glDeleteShader(fragment);
-    throw;
-  }
-  glDeleteShader(vertex);
-  glDeleteShader(fragment);
-  return program;
+  return buildGlProgram({{GL_VERTEX_SHADER, vertex_source}, {GL_FRAGMENT_SHADER, fragment_source}},
+                        std::string("GlRenderer: ") + name);
 }
 
 [[noreturn]] void throwOutOfPool(size_t item, const char* what) {

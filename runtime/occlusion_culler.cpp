@@ -196,7 +196,7 @@ void OcclusionCuller::buildAndReadBack(unsigned depth_texture, int width, int he
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
     glGetTextureImage(depth_texture, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
                       GLsizei(depth_scratch_.size() * sizeof(float)), depth_scratch_.data());
-    pyramid_ = HzbPyramid::fromDepth(depth_scratch_, width, height);
+    pyramid_.build(depth_scratch_, width, height);
   } else {
     builder_->build(depth_texture, width, height);
     builder_->readBack(pyramid_, hzbTestLevel(width, height, hzb_options_.read_width_px));
