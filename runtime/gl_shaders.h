@@ -59,11 +59,11 @@ struct DrawElementsIndirectCommand {
 };
 static_assert(sizeof(DrawElementsIndirectCommand) == 20);
 
-inline std::string meshVertexShader() {
+// The inputs every cluster vertex shader shares: 16-bit grid positions, the per-draw records
+// (indexed by gl_DrawIDARB) and the view-projection.
+inline std::string clusterVertexPreamble() {
   return std::string(R"(#version 450 core
 #extension GL_ARB_shader_draw_parameters : require
-// Positions arrive as 16-bit grid units; the cluster's eye-relative origin and cell size come
-// from the per-draw record, so everything here stays small and float-safe far from the origin.
 layout(location = 0) in uvec3 q;
 struct GpuDrawData {
 )") + TW_GL_STRINGIFY(TW_GPU_DRAW_DATA_FIELDS) +
@@ -71,6 +71,13 @@ struct GpuDrawData {
 };
 layout(std430, binding = 0) readonly buffer DrawDataBuffer { GpuDrawData draws[]; };
 layout(location = 0) uniform mat4 view_projection;
+)";
+}
+
+inline std::string meshVertexShader() {
+  return clusterVertexPreamble() + R"(
+// Positions arrive as 16-bit grid units; the cluster's eye-relative origin and cell size come
+// from the per-draw record, so everything here stays small and float-safe far from the origin.
 out vec3 pos_eye;
 flat out uint first_triangle;
 void main() {
@@ -124,15 +131,7 @@ void main() {
 // coarse occluder lies behind the true surface it stands for (the push is the cluster's
 // object-space error plus its quantization error). A vertex at the eye is left where it is.
 inline std::string occluderVertexShader() {
-  return std::string(R"(#version 450 core
-#extension GL_ARB_shader_draw_parameters : require
-layout(location = 0) in uvec3 q;
-struct GpuDrawData {
-)") + TW_GL_STRINGIFY(TW_GPU_DRAW_DATA_FIELDS) +
-         R"(
-};
-layout(std430, binding = 0) readonly buffer DrawDataBuffer { GpuDrawData draws[]; };
-layout(location = 0) uniform mat4 view_projection;
+  return clusterVertexPreamble() + R"(
 void main() {
   GpuDrawData d = draws[gl_DrawIDARB];
   vec3 p = d.offset_eye + vec3(q) * d.cell_m;

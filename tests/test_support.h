@@ -97,6 +97,18 @@ inline std::filesystem::path processScratchDir(const std::string& name) {
   return dir->path;
 }
 
+// Appends the closed box [lo, hi] to `mesh`: 8 vertices, 12 outward counter-clockwise triangles.
+inline void appendBox(TriangleMesh& mesh, const glm::vec3& lo, const glm::vec3& hi) {
+  const auto base = static_cast<uint32_t>(mesh.positions.size());
+  for (int i = 0; i < 8; ++i)
+    mesh.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
+  static constexpr uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
+                                             {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
+                                             {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+  for (const auto& f : kFaces)
+    for (uint32_t v : f) mesh.indices.push_back(base + v);
+}
+
 // A closed box of half extents `half` around the origin, each face an n x n grid of quads
 // (outward, counter-clockwise), vertices shared within a face only.
 inline TriangleMesh subdividedBox(const glm::vec3& half, int n) {

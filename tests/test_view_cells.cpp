@@ -6,30 +6,14 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "test_support.h"
 #include "view_cells.h"
 
 namespace tw {
 namespace {
 
-struct Soup {
-  std::vector<glm::vec3> positions;
-  std::vector<uint32_t> indices;
-};
-
-// A closed box [lo, hi], outward counter-clockwise faces.
-void addBox(Soup& soup, const glm::vec3& lo, const glm::vec3& hi) {
-  const auto base = uint32_t(soup.positions.size());
-  for (int i = 0; i < 8; ++i)
-    soup.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
-  static constexpr uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
-                                             {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
-                                             {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& f : kFaces)
-    for (uint32_t v : f) soup.indices.push_back(base + v);
-}
-
 // One open quad (two triangles).
-void addQuad(Soup& soup, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
+void addQuad(TriangleMesh& soup, const glm::vec3& a, const glm::vec3& b, const glm::vec3& c,
              const glm::vec3& d) {
   const auto base = uint32_t(soup.positions.size());
   soup.positions.insert(soup.positions.end(), {a, b, c, d});
@@ -43,22 +27,22 @@ bool isFree(const ViewCellGrid& grid, uint32_t x, uint32_t y, uint32_t z) {
 
 // A 12 m room (0.5 m walls of closed boxes, a 2 x 3 m doorway in the +x wall) holding a solid
 // 6 m block at [3, 9]^3. Cells are 1 m over [-1, 13]^3, so cell i spans [i - 1, i].
-Soup roomWithBlock() {
-  Soup soup;
-  addBox(soup, {-0.5f, -0.5f, -0.5f}, {12.5f, 12.5f, 0.0f});   // floor
-  addBox(soup, {-0.5f, -0.5f, 12.0f}, {12.5f, 12.5f, 12.5f});  // roof
-  addBox(soup, {-0.5f, -0.5f, 0.0f}, {0.0f, 12.5f, 12.0f});    // -x wall
-  addBox(soup, {0.0f, -0.5f, 0.0f}, {12.0f, 0.0f, 12.0f});     // -y wall
-  addBox(soup, {0.0f, 12.0f, 0.0f}, {12.0f, 12.5f, 12.0f});    // +y wall
-  addBox(soup, {12.0f, -0.5f, 0.0f}, {12.5f, 5.0f, 12.0f});    // +x wall, beside the door
-  addBox(soup, {12.0f, 7.0f, 0.0f}, {12.5f, 12.5f, 12.0f});
-  addBox(soup, {12.0f, 5.0f, 3.0f}, {12.5f, 7.0f, 12.0f});     // over the door
-  addBox(soup, {3.0f, 3.0f, 3.0f}, {9.0f, 9.0f, 9.0f});        // the block
+TriangleMesh roomWithBlock() {
+  TriangleMesh soup;
+  test::appendBox(soup, {-0.5f, -0.5f, -0.5f}, {12.5f, 12.5f, 0.0f});   // floor
+  test::appendBox(soup, {-0.5f, -0.5f, 12.0f}, {12.5f, 12.5f, 12.5f});  // roof
+  test::appendBox(soup, {-0.5f, -0.5f, 0.0f}, {0.0f, 12.5f, 12.0f});    // -x wall
+  test::appendBox(soup, {0.0f, -0.5f, 0.0f}, {12.0f, 0.0f, 12.0f});     // -y wall
+  test::appendBox(soup, {0.0f, 12.0f, 0.0f}, {12.0f, 12.5f, 12.0f});    // +y wall
+  test::appendBox(soup, {12.0f, -0.5f, 0.0f}, {12.5f, 5.0f, 12.0f});    // +x wall, beside the door
+  test::appendBox(soup, {12.0f, 7.0f, 0.0f}, {12.5f, 12.5f, 12.0f});
+  test::appendBox(soup, {12.0f, 5.0f, 3.0f}, {12.5f, 7.0f, 12.0f});     // over the door
+  test::appendBox(soup, {3.0f, 3.0f, 3.0f}, {9.0f, 9.0f, 9.0f});        // the block
   return soup;
 }
 
 TEST(ViewCells, BlockInsideIsDroppedRoomAirIsKept) {
-  const Soup soup = roomWithBlock();
+  const TriangleMesh soup = roomWithBlock();
   ViewCellOptions options;
   options.cell_size_m = 1.0;
   const ViewCellGrid grid =
@@ -88,8 +72,8 @@ TEST(ViewCells, BlockInsideIsDroppedRoomAirIsKept) {
 
 TEST(ViewCells, SealedBoxInteriorIsSolid) {
   // A closed 10 m box: OpenVDB's flood from outside never reaches its inside.
-  Soup soup;
-  addBox(soup, glm::vec3(0.0f), glm::vec3(10.0f));
+  TriangleMesh soup;
+  test::appendBox(soup, glm::vec3(0.0f), glm::vec3(10.0f));
   ViewCellOptions options;
   options.cell_size_m = 1.0;
   const ViewCellGrid grid =
@@ -105,7 +89,7 @@ TEST(ViewCells, SealedBoxInteriorIsSolid) {
 
 TEST(ViewCells, OpenGeometryKeepsEveryCell) {
   // A floor, a wall and an uncapped square duct: nothing encloses any volume.
-  Soup soup;
+  TriangleMesh soup;
   addQuad(soup, {0, 0, 0}, {20, 0, 0}, {20, 20, 0}, {0, 20, 0});
   addQuad(soup, {0, 10, 0}, {20, 10, 0}, {20, 10, 8}, {0, 10, 8});
   addQuad(soup, {2, 2, 2}, {2, 6, 2}, {18, 6, 2}, {18, 2, 2});
@@ -163,8 +147,8 @@ TEST(ViewCells, AutomaticSizeIsTidyAndNearTheTarget) {
 }
 
 TEST(ViewCells, RejectsBadInput) {
-  Soup soup;
-  addBox(soup, glm::vec3(0.0f), glm::vec3(1.0f));
+  TriangleMesh soup;
+  test::appendBox(soup, glm::vec3(0.0f), glm::vec3(1.0f));
   ViewCellOptions options;
   EXPECT_THROW(buildViewCells(soup.positions, soup.indices, glm::dvec3(1.0), glm::dvec3(0.0),
                               options),

@@ -25,26 +25,9 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Soup {
-  std::vector<glm::vec3> positions;
-  std::vector<uint32_t> indices;
-};
-
-// A closed box [lo, hi], outward counter-clockwise faces.
-void addBox(Soup& soup, const glm::vec3& lo, const glm::vec3& hi) {
-  const auto base = uint32_t(soup.positions.size());
-  for (int i = 0; i < 8; ++i)
-    soup.positions.push_back({(i & 1) ? hi.x : lo.x, (i & 2) ? hi.y : lo.y, (i & 4) ? hi.z : lo.z});
-  static constexpr uint32_t kFaces[12][3] = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6},
-                                             {0, 1, 4}, {1, 5, 4}, {2, 6, 3}, {3, 6, 7},
-                                             {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
-  for (const auto& f : kFaces)
-    for (uint32_t v : f) soup.indices.push_back(base + v);
-}
-
-Soup box(const glm::vec3& lo, const glm::vec3& hi) {
-  Soup soup;
-  addBox(soup, lo, hi);
+TriangleMesh box(const glm::vec3& lo, const glm::vec3& hi) {
+  TriangleMesh soup;
+  test::appendBox(soup, lo, hi);
   return soup;
 }
 
@@ -74,7 +57,7 @@ TEST(VisibilitySampling, SameSeedSameDataWhateverTheThreadCount) {
   EmbreeScene scene(glm::dvec3(0.0));
   for (uint32_t i = 0; i < 12; ++i) {
     const glm::vec3 lo(-9.0f + 1.5f * float(i), float(i % 3) * 3.0f - 4.0f, float(i % 4) - 1.0f);
-    Soup s = box(lo, lo + glm::vec3(1.0f, 0.5f + 0.2f * float(i), 1.5f));
+    TriangleMesh s = box(lo, lo + glm::vec3(1.0f, 0.5f + 0.2f * float(i), 1.5f));
     scene.addMesh(std::move(s.positions), std::move(s.indices), 100 + i);
   }
   scene.commit();
@@ -118,12 +101,12 @@ TEST(VisibilitySampling, BigWallRanksFirstWithHighCoverage) {
   // From the cell [0, 1]^3: a huge wall at x = 1.5 and a huge floor at z = -1 (one candidate,
   // id 7, three quarters of the sphere), and three small boxes elsewhere.
   EmbreeScene scene(glm::dvec3(0.0));
-  Soup wall = box({1.5f, -500.0f, -500.0f}, {2.0f, 500.0f, 500.0f});
-  addBox(wall, {-500.0f, -500.0f, -1.5f}, {1.5f, 500.0f, -1.0f});
+  TriangleMesh wall = box({1.5f, -500.0f, -500.0f}, {2.0f, 500.0f, 500.0f});
+  test::appendBox(wall, {-500.0f, -500.0f, -1.5f}, {1.5f, 500.0f, -1.0f});
   scene.addMesh(std::move(wall.positions), std::move(wall.indices), 7);
-  Soup a = box({-7.0f, -1.0f, 0.0f}, {-5.0f, 1.0f, 2.0f});
-  Soup b = box({-1.0f, -7.0f, 0.0f}, {1.0f, -5.0f, 2.0f});
-  Soup c = box({-1.0f, -1.0f, 5.0f}, {1.0f, 1.0f, 7.0f});
+  TriangleMesh a = box({-7.0f, -1.0f, 0.0f}, {-5.0f, 1.0f, 2.0f});
+  TriangleMesh b = box({-1.0f, -7.0f, 0.0f}, {1.0f, -5.0f, 2.0f});
+  TriangleMesh c = box({-1.0f, -1.0f, 5.0f}, {1.0f, 1.0f, 7.0f});
   scene.addMesh(std::move(a.positions), std::move(a.indices), 3);
   scene.addMesh(std::move(b.positions), std::move(b.indices), 4);
   scene.addMesh(std::move(c.positions), std::move(c.indices), 5);
@@ -151,9 +134,9 @@ TEST(VisibilitySampling, BigWallRanksFirstWithHighCoverage) {
 
 TEST(VisibilitySampling, VisibleSetHasWhatRaysSeeNotWhatIsSealedAway) {
   EmbreeScene scene(glm::dvec3(0.0));
-  Soup seen = box({4.0f, -1.0f, -1.0f}, {6.0f, 1.0f, 1.0f});
-  Soup shell = box({-9.0f, -3.0f, -3.0f}, {-4.0f, 3.0f, 3.0f});  // closed
-  Soup hidden = box({-7.0f, -1.0f, -1.0f}, {-5.0f, 1.0f, 1.0f});  // inside the shell
+  TriangleMesh seen = box({4.0f, -1.0f, -1.0f}, {6.0f, 1.0f, 1.0f});
+  TriangleMesh shell = box({-9.0f, -3.0f, -3.0f}, {-4.0f, 3.0f, 3.0f});  // closed
+  TriangleMesh hidden = box({-7.0f, -1.0f, -1.0f}, {-5.0f, 1.0f, 1.0f});  // inside the shell
   scene.addMesh(std::move(seen.positions), std::move(seen.indices), 1);
   scene.addMesh(std::move(shell.positions), std::move(shell.indices), 2);
   scene.addMesh(std::move(hidden.positions), std::move(hidden.indices), 3);
