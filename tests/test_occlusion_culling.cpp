@@ -107,12 +107,17 @@ WalkthroughOptions smallOptions(OcclusionMode mode) {
   return options;
 }
 
-// Renders until nothing is missing (every page the cut wants is resident) or 200 frames.
+// Renders until nothing has been missing (every page the cut wants resident) for three frames
+// in a row, or 200 frames. One complete frame is not enough: on the frame the last pages arrive
+// the cut changes, none of it was visible the frame before, and without the final-depth rebuild
+// the whole cut is next frame's pass 1; the frame after that is the steady one.
 FrameStats settle(Walkthrough& walk, const Camera& camera) {
   FrameStats stats;
-  for (int i = 0; i < 200; ++i) {
+  int complete_frames = 0;
+  for (int i = 0; i < 200 && complete_frames < 3; ++i) {
     stats = walk.renderFrame(camera, 0.0);
-    if (stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 && i >= 2) break;
+    const bool complete = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0;
+    complete_frames = complete ? complete_frames + 1 : 0;
   }
   return stats;
 }
