@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <stdexcept>
@@ -16,6 +17,7 @@
 #include <variant>
 
 #include "package_view.h"
+#include "record_spill.h"
 #include "tws_format.h"
 
 namespace tw {
@@ -57,22 +59,10 @@ class TempFile {
     if (bytes > 0 && std::fwrite(data, 1, bytes, file_) != bytes) ioFail("cannot write");
     written_ += bytes;
   }
-  // Appends the first `bytes` of `source` in chunks (the page spill: never all in memory).
-  void copyFrom(const std::filesystem::path& source, uint64_t bytes) {
-    std::FILE* in = std::fopen(source.c_str(), "rb");
-    if (!in) ioFail("cannot read " + source.string() + " for");
-    std::vector<uint8_t> chunk(std::min<uint64_t>(bytes, 4u << 20));
-    uint64_t left = bytes;
-    while (left > 0) {
-      const size_t n = static_cast<size_t>(std::min<uint64_t>(left, chunk.size()));
-      if (std::fread(chunk.data(), 1, n, in) != n) {
-        std::fclose(in);
-        ioFail("short read of " + source.string() + " for");
-      }
-      write(chunk.data(), n);
-      left -= n;
-    }
-    std::fclose(in);
+  // Appends a spill file's bytes in chunks (never all in memory).
+  void copyFrom(const RecordSpill& source) {
+    source.forEachChunk(4u << 20,
+                        [this](std::span<const uint8_t> chunk) { write(chunk.data(), chunk.size()); });
   }
   void padTo(uint64_t offset) {
     static const uint8_t kZeros[kSectionAlignment] = {};
@@ -129,18 +119,7 @@ std::span<const uint8_t> storePage(std::span<const uint8_t> raw, const PackageWr
 class PageSpill {
  public:
   PageSpill(const std::filesystem::path& path, const PackageWriteOptions& options)
-      : path_(path), options_(options), hash_(XXH3_createState()) {
-    if (!hash_) throw std::bad_alloc();
-    XXH3_64bits_reset(hash_);
-    file_ = std::fopen(path.c_str(), "wb");
-    if (!file_) ioFail("cannot create");
-  }
-  ~PageSpill() {
-    if (file_) std::fclose(file_);
-    XXH3_freeState(hash_);
-  }
-  PageSpill(const PageSpill&) = delete;
-  PageSpill& operator=(const PageSpill&) = delete;
+      : data_(path, 1, "page data"), options_(options) {}
 
   void append(std::span<const uint8_t> raw) {
     if (raw.size() > kMaxPageRawBytes)
@@ -149,51 +128,48 @@ class PageSpill {
     PageRecord p{};
     std::span<const uint8_t> stored = storePage(raw, options_, compressed_, p);
     static const uint8_t kZeros[kSectionAlignment] = {};
-    p.offset = alignUp(bytes_, kSectionAlignment);
-    write(kZeros, p.offset - bytes_);
-    write(stored.data(), stored.size());
+    p.offset = alignUp(data_.bytes(), kSectionAlignment);
+    data_.append(kZeros, p.offset - data_.bytes());
+    data_.appendBytes(stored);
     records_.push_back(p);
     raw_bytes_ += raw.size();
   }
-  // Makes everything appended readable through another handle.
-  void flush() const {
-    if (std::fflush(file_) != 0) ioFail("cannot write");
-  }
-  // XXH3-64 of the spilled bytes followed by `tail`: the section checksum.
-  uint64_t checksumWith(std::span<const uint8_t> tail) const {
-    XXH3_state_t* copy = XXH3_createState();
-    if (!copy) throw std::bad_alloc();
-    XXH3_copyState(copy, hash_);
-    if (!tail.empty()) XXH3_64bits_update(copy, tail.data(), tail.size());
-    uint64_t sum = XXH3_64bits_digest(copy);
-    XXH3_freeState(copy);
-    return sum;
-  }
-  const std::filesystem::path& path() const { return path_; }
+  const RecordSpill& data() const { return data_; }
   const PackageWriteOptions& options() const { return options_; }
   const std::vector<PageRecord>& records() const { return records_; }
-  uint64_t bytes() const { return bytes_; }
+  uint64_t bytes() const { return data_.bytes(); }
   uint64_t rawBytes() const { return raw_bytes_; }
 
  private:
-  void write(const void* data, size_t bytes) {
-    if (bytes == 0) return;
-    if (std::fwrite(data, 1, bytes, file_) != bytes) ioFail("cannot write");
-    XXH3_64bits_update(hash_, data, bytes);
-    bytes_ += bytes;
-  }
-  [[noreturn]] void ioFail(const char* what) const {
-    throw std::runtime_error(path_.string() + ": " + what + " page spill file: " +
-                             std::strerror(errno));
-  }
-  std::filesystem::path path_;
+  RecordSpill data_;
   PackageWriteOptions options_;
-  XXH3_state_t* hash_;
-  std::FILE* file_ = nullptr;
   std::vector<PageRecord> records_;
   std::vector<uint8_t> compressed_;
-  uint64_t bytes_ = 0;
   uint64_t raw_bytes_ = 0;
+};
+
+// The tables' older records, one file each, and the rule that moves them there: a table's
+// in-memory tail goes to its file once it holds tail_bytes.
+class TableSpill {
+ public:
+  TableSpill(const std::filesystem::path& dir, uint64_t tail_limit_bytes)
+      : tail_bytes(std::max<uint64_t>(tail_limit_bytes, 1)),
+        clusters(dir / "clusters.spill", sizeof(ClusterRecord), "cluster table"),
+        groups(dir / "groups.spill", sizeof(GroupRecord), "group table"),
+        instances(dir / "instances.spill", sizeof(InstanceRecord), "instance table"),
+        profiles(dir / "profiles.spill", sizeof(glm::vec2), "profile table"),
+        objects(dir / "objects.spill", sizeof(ObjectRecord), "object table"),
+        strings(dir / "strings.spill", 1, "string pool") {}
+
+  template <typename Tail>
+  void flushIfFull(Tail& tail, RecordSpill& file) const {
+    if (tail.size() * sizeof(tail[0]) < tail_bytes) return;
+    file.append(tail.data(), tail.size());
+    tail.clear();
+  }
+
+  const uint64_t tail_bytes;
+  RecordSpill clusters, groups, instances, profiles, objects, strings;
 };
 
 void setClusterLod(pkg::ClusterRecord& r, const ClusterLod& lod, const glm::vec3& fallback_center,
@@ -213,8 +189,9 @@ void setClusterLod(pkg::ClusterRecord& r, const ClusterLod& lod, const glm::vec3
 }
 
 uint64_t PackageStorage::addString(std::string_view text) {
-  uint64_t offset = strings.size();
+  uint64_t offset = stringBytes();
   strings.append(text);
+  if (tables) tables->flushIfFull(strings, tables->strings);
   return offset;
 }
 
@@ -239,8 +216,10 @@ uint32_t PackageStorage::addObject(const ObjectInfo& info, const glm::vec3& aabb
   r.db_key_offset = addString(info.db_key);
   setVec3(r.aabb_min, aabb_min);
   setVec3(r.aabb_max, aabb_max);
+  const uint32_t index = objectCount();
   objects.push_back(r);
-  return static_cast<uint32_t>(objects.size() - 1);
+  if (tables) tables->flushIfFull(objects, tables->objects);
+  return index;
 }
 
 void PackageStorage::placeEncodedCluster(std::span<const uint8_t> encoded, ClusterRecord& record) {
@@ -278,6 +257,86 @@ uint32_t PackageStorage::pageCount() const {
 
 uint64_t PackageStorage::spilledPageBytes() const { return spill ? spill->bytes() : 0; }
 
+void PackageStorage::spillTablesTo(const std::filesystem::path& dir, uint64_t tail_bytes) {
+  if (tables || !clusters.empty() || !groups.empty() || !instances.empty() ||
+      !profile_points.empty() || !objects.empty() || !strings.empty())
+    throw std::logic_error("package: spillTablesTo must be called before any record exists");
+  std::filesystem::create_directories(dir);
+  tables = std::make_shared<TableSpill>(dir, tail_bytes);
+}
+
+uint32_t PackageStorage::clusterCount() const {
+  return static_cast<uint32_t>((tables ? tables->clusters.count() : 0) + clusters.size());
+}
+uint32_t PackageStorage::groupCount() const {
+  return static_cast<uint32_t>((tables ? tables->groups.count() : 0) + groups.size());
+}
+uint32_t PackageStorage::instanceCount() const {
+  return static_cast<uint32_t>((tables ? tables->instances.count() : 0) + instances.size());
+}
+uint64_t PackageStorage::profilePointCount() const {
+  return (tables ? tables->profiles.count() : 0) + profile_points.size();
+}
+uint32_t PackageStorage::objectCount() const {
+  return static_cast<uint32_t>((tables ? tables->objects.count() : 0) + objects.size());
+}
+uint64_t PackageStorage::stringBytes() const {
+  return (tables ? tables->strings.count() : 0) + strings.size();
+}
+
+namespace {
+
+// Records [first, first + count) of a table split into a spilled head and an in-memory tail.
+template <typename Record>
+void readSplit(const RecordSpill* head, const std::vector<Record>& tail, uint64_t first,
+               uint64_t count, Record* out) {
+  const uint64_t spilled = head ? head->count() : 0;
+  if (first > spilled + tail.size() || count > spilled + tail.size() - first)
+    throw std::out_of_range("package: record index out of range");
+  if (first < spilled) {
+    const uint64_t n = std::min(count, spilled - first);
+    head->read(first, n, out);
+    out += n;
+    first += n;
+    count -= n;
+  }
+  std::copy_n(tail.begin() + ptrdiff_t(first - spilled), count, out);
+}
+
+}  // namespace
+
+ClusterRecord PackageStorage::clusterRecord(uint32_t index) const {
+  ClusterRecord r;
+  readSplit(tables ? &tables->clusters : nullptr, clusters, index, 1, &r);
+  return r;
+}
+
+InstanceRecord PackageStorage::instanceRecord(uint32_t index) const {
+  InstanceRecord r;
+  readSplit(tables ? &tables->instances : nullptr, instances, index, 1, &r);
+  return r;
+}
+
+void PackageStorage::readProfilePoints(uint64_t first, uint32_t count,
+                                       std::vector<glm::vec2>& out) const {
+  out.resize(count);
+  readSplit(tables ? &tables->profiles : nullptr, profile_points, first, count, out.data());
+}
+
+uint32_t PackageStorage::appendCluster(const ClusterRecord& record) {
+  const uint32_t index = clusterCount();
+  clusters.push_back(record);
+  if (tables) tables->flushIfFull(clusters, tables->clusters);
+  return index;
+}
+
+uint32_t PackageStorage::appendGroup(const GroupRecord& record) {
+  const uint32_t index = groupCount();
+  groups.push_back(record);
+  if (tables) tables->flushIfFull(groups, tables->groups);
+  return index;
+}
+
 uint32_t PackageStorage::addMeshCluster(const ClusterGeometryInput& geometry, const ClusterLod& lod,
                                         bool optimize) {
   std::vector<uint8_t> encoded;
@@ -298,8 +357,7 @@ uint32_t PackageStorage::addMeshCluster(const ClusterGeometryInput& geometry, co
   r.object_min = info.object_min;
   r.object_max = info.object_max;
   placeEncodedCluster(encoded, r);
-  clusters.push_back(r);
-  return static_cast<uint32_t>(clusters.size() - 1);
+  return appendCluster(r);
 }
 
 namespace {
@@ -416,25 +474,39 @@ uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform
   const float* m = &transform.linear[0][0];
   std::copy(m, m + 9, r.linear);
   r.object = object;
+  const uint64_t profile_base = profilePointCount() - profile_points.size();
   std::visit(InstanceFiller{r, profile_points}, primitive);
+  r.profile_first = static_cast<uint32_t>(profile_base + r.profile_first);
+  if (r.profile_count == 0) r.profile_first = 0;
+  const uint32_t index = instanceCount();
   instances.push_back(r);
-  return static_cast<uint32_t>(instances.size() - 1);
+  if (tables) {
+    tables->flushIfFull(instances, tables->instances);
+    tables->flushIfFull(profile_points, tables->profiles);
+  }
+  return index;
 }
 
 uint32_t PackageStorage::addParametricCluster(uint32_t first_instance, uint32_t count,
                                               const ClusterLod& lod) {
-  if (count == 0 || first_instance > instances.size() ||
-      count > instances.size() - first_instance)
+  const uint32_t total = instanceCount();
+  if (count == 0 || first_instance > total || count > total - first_instance)
     throw std::invalid_argument("package: parametric cluster instance range is invalid");
   ClusterRecord r{};
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
   r.object_min = ~0u;
-  for (uint32_t i = first_instance; i < first_instance + count; ++i) {
-    const InstanceRecord& in = instances[i];
-    if (in.type != instances[first_instance].type)
+  std::vector<InstanceRecord> range(count);
+  readSplit(tables ? &tables->instances : nullptr, instances, first_instance, count, range.data());
+  std::vector<glm::vec2> points;
+  for (InstanceRecord in : range) {
+    if (in.type != range[0].type)
       throw std::invalid_argument("package: a parametric cluster mixes primitive types");
+    if (in.profile_count > 0) {  // its own points, rebased so the bounds read them at 0
+      readProfilePoints(in.profile_first, in.profile_count, points);
+      in.profile_first = 0;
+    }
     glm::vec3 bmin, bmax;
-    instanceBounds(in, profile_points, bmin, bmax);
+    instanceBounds(in, points, bmin, bmax);
     lo = glm::min(lo, bmin);
     hi = glm::max(hi, bmax);
     r.object_min = std::min(r.object_min, in.object);
@@ -451,8 +523,7 @@ uint32_t PackageStorage::addParametricCluster(uint32_t first_instance, uint32_t 
   r.page = kNone;
   r.instance_first = first_instance;
   r.instance_count = count;
-  clusters.push_back(r);
-  return static_cast<uint32_t>(clusters.size() - 1);
+  return appendCluster(r);
 }
 
 PackageWriteStats writePackage(const PackageStorage& storage, const std::filesystem::path& path,
@@ -468,15 +539,28 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   const uint64_t spilled_bytes = spill ? spill->bytes() : 0;
   std::vector<PageRecord> page_records;
   if (spill) {
-    spill->flush();
     page_records = spill->records();
     stats.page_raw_bytes = spill->rawBytes();
   }
   const size_t first_memory_page = page_records.size();
   page_records.resize(first_memory_page + storage.pages.size());
-  for (const ClusterRecord& c : storage.clusters)
+  const TableSpill* tables = storage.tables.get();
+  // Every cluster record, spilled ones first, in chunks.
+  auto for_each_cluster = [&](const std::function<void(const ClusterRecord&)>& fn) {
+    if (tables)
+      tables->clusters.forEachChunk(4u << 20, [&](std::span<const uint8_t> chunk) {
+        for (size_t at = 0; at < chunk.size(); at += sizeof(ClusterRecord)) {
+          ClusterRecord c;
+          std::memcpy(&c, chunk.data() + at, sizeof c);
+          fn(c);
+        }
+      });
+    for (const ClusterRecord& c : storage.clusters) fn(c);
+  };
+  for_each_cluster([&](const ClusterRecord& c) {
     if (c.kind == static_cast<uint8_t>(ClusterKind::Mesh) && c.page < page_records.size())
       ++page_records[c.page].cluster_count;
+  });
   std::vector<uint8_t> page_data;
   std::vector<uint8_t> compressed;
   for (size_t i = 0; i < storage.pages.size(); ++i) {
@@ -513,48 +597,50 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   h.position_step_m = storage.position_step_m;
   h.target_page_bytes = storage.target_page_bytes;
   glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  for (const ClusterRecord& c : storage.clusters) {
+  for_each_cluster([&](const ClusterRecord& c) {
     lo = glm::min(lo, glm::vec3(c.aabb_min[0], c.aabb_min[1], c.aabb_min[2]));
     hi = glm::max(hi, glm::vec3(c.aabb_max[0], c.aabb_max[1], c.aabb_max[2]));
     h.level_count = std::max<uint32_t>(h.level_count, c.level + 1u);
     h.max_cluster_triangles = std::max(h.max_cluster_triangles, c.triangle_count);
     if (c.level == 0) h.total_triangles += c.triangle_count;
-  }
-  if (storage.clusters.empty()) lo = hi = glm::vec3(0.0f);
+  });
+  if (storage.clusterCount() == 0) lo = hi = glm::vec3(0.0f);
   setVec3(h.bounds_min, lo);
   setVec3(h.bounds_max, hi);
 
-  // Sections, in file order == table order.
+  // Sections, in file order == table order: a spilled head (a file) then an in-memory tail.
   struct Piece {
-    const void* data;
-    uint64_t count;
+    const RecordSpill* head;
+    const void* tail;
+    uint64_t tail_count;
   };
   const Piece pieces[kSectionCount] = {
-      {storage.clusters.data(), storage.clusters.size()},
-      {storage.groups.data(), storage.groups.size()},
-      {page_records.data(), page_records.size()},
-      {storage.instances.data(), storage.instances.size()},
-      {storage.profile_points.data(), storage.profile_points.size()},
-      {storage.objects.data(), storage.objects.size()},
-      {storage.layers.data(), storage.layers.size()},
-      {storage.strings.data(), storage.strings.size()},
-      {storage.visibility.data(), storage.visibility.size()},
-      {page_data.data(), spilled_bytes + page_data.size()},
+      {tables ? &tables->clusters : nullptr, storage.clusters.data(), storage.clusters.size()},
+      {tables ? &tables->groups : nullptr, storage.groups.data(), storage.groups.size()},
+      {nullptr, page_records.data(), page_records.size()},
+      {tables ? &tables->instances : nullptr, storage.instances.data(), storage.instances.size()},
+      {tables ? &tables->profiles : nullptr, storage.profile_points.data(),
+       storage.profile_points.size()},
+      {tables ? &tables->objects : nullptr, storage.objects.data(), storage.objects.size()},
+      {nullptr, storage.layers.data(), storage.layers.size()},
+      {tables ? &tables->strings : nullptr, storage.strings.data(), storage.strings.size()},
+      {nullptr, storage.visibility.data(), storage.visibility.size()},
+      {spill ? &spill->data() : nullptr, page_data.data(), page_data.size()},
   };
   SectionEntry table[kSectionCount] = {};
   uint64_t cursor = sizeof(PackageHeader) + sizeof(table);
   for (uint32_t i = 0; i < kSectionCount; ++i) {
     SectionEntry& e = table[i];
+    const Piece& piece = pieces[i];
+    const uint64_t head_bytes = piece.head ? piece.head->bytes() : 0;
+    const std::span<const uint8_t> tail(static_cast<const uint8_t*>(piece.tail),
+                                        size_t(piece.tail_count * kSectionRecordBytes[i]));
     e.type = i;
     e.record_bytes = kSectionRecordBytes[i];
-    e.count = pieces[i].count;
-    e.bytes = pieces[i].count * kSectionRecordBytes[i];
+    e.bytes = head_bytes + tail.size();
+    e.count = e.bytes / kSectionRecordBytes[i];
     e.offset = alignUp(cursor, kSectionAlignment);
-    if (i == static_cast<uint32_t>(SectionType::PageData) && spill)
-      e.checksum = spill->checksumWith(page_data);
-    else
-      e.checksum = packageSectionChecksum(
-          {static_cast<const uint8_t*>(pieces[i].data), static_cast<size_t>(e.bytes)});
+    e.checksum = piece.head ? piece.head->checksumWith(tail) : packageSectionChecksum(tail);
     cursor = e.offset + e.bytes;
     stats.section_bytes[i] = e.bytes;
   }
@@ -567,12 +653,9 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   out.write(table, sizeof(table));
   for (uint32_t i = 0; i < kSectionCount; ++i) {
     out.padTo(table[i].offset);
-    if (i == static_cast<uint32_t>(SectionType::PageData) && spill) {
-      out.copyFrom(spill->path(), spilled_bytes);
-      out.write(page_data.data(), page_data.size());
-    } else {
-      out.write(pieces[i].data, table[i].bytes);
-    }
+    const Piece& piece = pieces[i];
+    if (piece.head) out.copyFrom(*piece.head);
+    out.write(piece.tail, piece.tail_count * kSectionRecordBytes[i]);
   }
   out.close();
   // The view's checks are the definition of a valid package: refuse to publish anything else.

@@ -4,9 +4,11 @@
 // writePackage lays the sections out (docs/package-format.md), compresses pages, checksums each
 // section with XXH3-64 and writes everything to "<path>.tmp-<pid>", which it re-opens with
 // PackageView (so the writer never produces a file its reader rejects) and renames onto `path`.
-// Memory: the tables (clusters, groups, instances, objects, strings) are held in memory; pages are
-// too unless spillPagesTo() streams each finished page, compressed, to a spill file, which
-// writePackage then copies into the package in chunks.
+// Memory: by default everything is held in memory. spillPagesTo() streams each finished page,
+// compressed, to a spill file, and spillTablesTo() streams the older records of the tables
+// (clusters, groups, instances, profile points, objects, strings) to files as well, so a build's
+// memory does not grow with the model; writePackage then copies the files into the package in
+// chunks, continuing each section's checksum over what is still in memory.
 #pragma once
 
 #include <cstdint>
@@ -47,7 +49,8 @@ struct PackageWriteOptions {
   int zstd_level = 9;
 };
 
-class PageSpill;  // package_writer.cpp: finished pages, compressed, in a file
+class PageSpill;   // package_writer.cpp: finished pages, compressed, in a file
+class TableSpill;  // package_writer.cpp: the tables' older records, in files
 
 struct PackageStorage {
   // Build constants copied into the header.
@@ -88,6 +91,31 @@ struct PackageStorage {
   uint32_t pageCount() const;  // spilled + in memory
   uint64_t spilledPageBytes() const;  // page-data bytes already in the spill file
   std::shared_ptr<PageSpill> spill;  // null unless spillPagesTo was called
+
+  // Streams the tables out of memory: from now on `clusters`, `groups`, `instances`,
+  // `profile_points`, `objects` and `strings` keep only their newest entries (about `tail_bytes`
+  // each at most) and move older ones to files in `dir` (created if missing; the caller removes
+  // it). Indices stay global: use the counts and readers below rather than the vectors' sizes.
+  // Call before any record exists (throws std::logic_error otherwise; layers stay in memory);
+  // throws std::runtime_error on I/O failure.
+  void spillTablesTo(const std::filesystem::path& dir, uint64_t tail_bytes = 1u << 20);
+  std::shared_ptr<TableSpill> tables;  // null unless spillTablesTo was called
+
+  // Spilled + in memory.
+  uint32_t clusterCount() const;
+  uint32_t groupCount() const;
+  uint32_t instanceCount() const;
+  uint64_t profilePointCount() const;
+  uint32_t objectCount() const;
+  uint64_t stringBytes() const;
+  // One record, wherever it is; throws std::out_of_range for a bad index.
+  pkg::ClusterRecord clusterRecord(uint32_t index) const;
+  pkg::InstanceRecord instanceRecord(uint32_t index) const;
+  // Profile points [first, first + count) into `out` (replaced); throws std::out_of_range.
+  void readProfilePoints(uint64_t first, uint32_t count, std::vector<glm::vec2>& out) const;
+  // Append finished records; return their index.
+  uint32_t appendCluster(const pkg::ClusterRecord& record);
+  uint32_t appendGroup(const pkg::GroupRecord& record);
 
   // Encodes `geometry` (page_codec.h) with this package's step, places it in a page and appends
   // its cluster record with bounds from the decoded positions; returns the cluster index.

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <tuple>
 #include <stdexcept>
 #include <string>
 
@@ -34,8 +35,8 @@ uint32_t rebase(uint32_t index, uint32_t base) { return index == kNoGroup ? kNon
 
 DagPlacement beginDagPlacement(const PackageStorage& storage) {
   DagPlacement placement;
-  placement.first_cluster = uint32_t(storage.clusters.size());
-  placement.first_group = uint32_t(storage.groups.size());
+  placement.first_cluster = storage.clusterCount();
+  placement.first_group = storage.groupCount();
   return placement;
 }
 
@@ -43,17 +44,17 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
                           const std::vector<std::vector<glm::vec3>>& snapped,
                           const std::vector<uint32_t>& shifts, DagPlacement& placement,
                           PackageStorage& storage) {
-  if (uint64_t(placement.first_cluster) + first_cluster != storage.clusters.size() ||
-      uint64_t(placement.first_group) + first_group != storage.groups.size())
+  if (uint64_t(placement.first_cluster) + first_cluster != storage.clusterCount() ||
+      uint64_t(placement.first_group) + first_group != storage.groupCount())
     throw std::invalid_argument("addDagPieceToPackage: piece added out of order");
   if (snapped.size() != dag.clusters.size() || shifts.size() != dag.clusters.size())
     throw std::invalid_argument("addDagPieceToPackage: one snapped cluster and shift per cluster");
-  if (uint64_t(storage.clusters.size()) + dag.clusters.size() >= kNone ||
-      uint64_t(storage.groups.size()) + dag.groups.size() >= kNone)
+  if (uint64_t(storage.clusterCount()) + dag.clusters.size() >= kNone ||
+      uint64_t(storage.groupCount()) + dag.groups.size() >= kNone)
     throw std::invalid_argument("addDagToPackage: too many clusters or groups for the format");
 
   // Check the piece before writing anything that depends on it.
-  const size_t object_count = storage.objects.size();
+  const size_t object_count = storage.objectCount();
   for (size_t c = 0; c < dag.clusters.size(); ++c) {
     const DagCluster& cl = dag.clusters[c];
     if (cl.level > std::numeric_limits<uint16_t>::max())
@@ -82,6 +83,9 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
   encode_options.position_step_m = storage.position_step_m;
   std::vector<std::vector<uint8_t>> encoded;
   std::vector<EncodedClusterInfo> infos;
+  // This piece's cluster boxes, for its groups' boxes (the records may already be spilled).
+  std::vector<std::pair<glm::vec3, glm::vec3>> piece_boxes;
+  piece_boxes.reserve(dag.clusters.size());
   for (size_t batch = 0; batch < dag.clusters.size(); batch += kEncodeBatch) {
     const size_t count = std::min(kEncodeBatch, dag.clusters.size() - batch);
     encoded.assign(count, {});
@@ -127,7 +131,8 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
       r.object_min = info.object_min;
       r.object_max = info.object_max;
       storage.placeEncodedCluster(encoded[i], r);
-      storage.clusters.push_back(r);
+      storage.appendCluster(r);
+      piece_boxes.emplace_back(info.aabb_min, info.aabb_max);
       placement.encoded_bytes += encoded[i].size();
     }
   }
@@ -141,9 +146,16 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
     const std::vector<uint32_t>& boxed = g.clusters.empty() ? g.children : g.clusters;
     glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
     for (uint32_t c : boxed) {
-      const ClusterRecord& cr = storage.clusters[placement.first_cluster + c];
-      lo = glm::min(lo, glm::vec3(cr.aabb_min[0], cr.aabb_min[1], cr.aabb_min[2]));
-      hi = glm::max(hi, glm::vec3(cr.aabb_max[0], cr.aabb_max[1], cr.aabb_max[2]));
+      glm::vec3 box_min, box_max;
+      if (c >= first_cluster) {
+        std::tie(box_min, box_max) = piece_boxes[c - first_cluster];
+      } else {  // a child in an earlier piece (a brick root under a merged group)
+        const ClusterRecord cr = storage.clusterRecord(placement.first_cluster + c);
+        box_min = glm::vec3(cr.aabb_min[0], cr.aabb_min[1], cr.aabb_min[2]);
+        box_max = glm::vec3(cr.aabb_max[0], cr.aabb_max[1], cr.aabb_max[2]);
+      }
+      lo = glm::min(lo, box_min);
+      hi = glm::max(hi, box_max);
     }
     if (boxed.empty()) lo = hi = g.sphere_center;
     setVec3(r.aabb_min, lo);
@@ -153,7 +165,7 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
       r.max_parent_error = std::max(r.max_parent_error, dag.clusters[c - first_cluster].parent_error);
     r.first_cluster = g.clusters.empty() ? 0 : placement.first_cluster + g.clusters[0];
     r.cluster_count = uint32_t(g.clusters.size());
-    storage.groups.push_back(r);
+    storage.appendGroup(r);
   }
 }
 

@@ -107,7 +107,7 @@ std::vector<uint32_t> addParametricClusters(std::span<const ParametricItem> item
     const uint32_t begin = clustering.offsets[c], end = clustering.offsets[c + 1];
     if (begin >= end || end > clustering.order.size())
       throw std::invalid_argument("addParametricClusters: clustering has a bad cluster range");
-    const uint32_t first = uint32_t(storage.instances.size());
+    const uint32_t first = storage.instanceCount();
     for (uint32_t i = begin; i < end; ++i) {
       const ParametricItem& item = items[clustering.order[i]];
       storage.addInstance(item.primitive, item.transform, item.object);

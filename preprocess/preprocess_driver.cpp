@@ -357,7 +357,12 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   storage.origin = scene.origin;
   storage.input_hash = cache.runHash();
   std::filesystem::create_directories(bricking.work_dir);
+  // Pages and tables stream to files as they are filled: what stays in memory while packing is
+  // one brick's DAG, the open page and a short tail of each table, whatever the model's size.
   storage.spillPagesTo(bricking.work_dir / "pages.spill");
+  // Each table keeps about budget / 1024 in memory (2 MiB at the default 2G).
+  storage.spillTablesTo(bricking.work_dir / "tables",
+                        std::clamp<uint64_t>(options.memory_budget_bytes / 1024, 1024, 4u << 20));
   for (const Layer& layer : scene.layers) storage.addLayer(layer);
   forEachObject(scene, [&](const BrickedObject& object) {
     ObjectInfo info;

@@ -52,14 +52,17 @@ Patch makePatch(int n, float size_m, glm::vec3 offset, uint32_t first_object, ui
 // Two LOD levels (4 clusters in group 0 simplified into 1 root cluster in group 1), two
 // parametric clusters (cylinders; an extrusion with a profile), 3 objects on 2 layers, pages small
 // enough that there are several.
-// With `spill`, finished pages stream to that file (spillPagesTo) with `spill_options`.
+// With `spill`, finished pages stream to that file (spillPagesTo) with `spill_options`; with
+// `tables`, the tables stream to files in that directory keeping `tail_bytes` in memory.
 PackageStorage makeStorage(const std::filesystem::path& spill = {},
-                           const PackageWriteOptions& spill_options = {}) {
+                           const PackageWriteOptions& spill_options = {},
+                           const std::filesystem::path& tables = {}, uint64_t tail_bytes = 1) {
   PackageStorage s;
   s.origin = glm::dvec3(451234.5, 6781234.25, -12.0);
   s.input_hash = 0x1234abcd5678ef90ull;
   s.target_page_bytes = 1500;
   if (!spill.empty()) s.spillPagesTo(spill, spill_options);
+  if (!tables.empty()) s.spillTablesTo(tables, tail_bytes);
   s.addLayer({"piping", 0xff0000ffu});
   s.addLayer({"structure", 0xff00ff00u});
   ObjectInfo o;
@@ -99,8 +102,8 @@ PackageStorage makeStorage(const std::filesystem::path& spill = {},
   Patch coarse = makePatch(3, 2.0f, glm::vec3(0.0f), 0, 3);
   s.addMeshCluster(coarse.input(), root);
   // Group 0 simplified clusters 0-3 into cluster 4; group 1 dropped the cylinders (no output).
-  s.groups.push_back({{1.0f, 1.0f, 0.0f}, 1.7f, {0, 0, 0}, 0.02f, {2, 2, 0.5f}, kInf, 4, 1, 0, 0});
-  s.groups.push_back({{0.0f, 0.0f, 0.0f}, 3.0f, {-3, -3, -3}, 0.05f, {3, 3, 3}, 0.05f, 0, 0, 0, 0});
+  s.appendGroup({{1.0f, 1.0f, 0.0f}, 1.7f, {0, 0, 0}, 0.02f, {2, 2, 0.5f}, kInf, 4, 1, 0, 0});
+  s.appendGroup({{0.0f, 0.0f, 0.0f}, 3.0f, {-3, -3, -3}, 0.05f, {3, 3, 3}, 0.05f, 0, 0, 0, 0});
 
   Transform t;
   t.origin = s.origin;
@@ -304,6 +307,60 @@ TEST(Package, SpilledPagesGiveTheSameFile) {
     ADD_FAILURE() << "no error for an unwritable spill file";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find("pages.spill"), std::string::npos) << e.what();
+  }
+}
+
+// Tables streamed to files as they fill (every record at once with a 1-byte tail, or in chunks)
+// give the very bytes of tables kept in memory, together with spilled pages or not; the storage
+// keeps only the tail, and its counts and readers see every record.
+TEST(Package, SpilledTablesGiveTheSameFile) {
+  const std::filesystem::path dir = test::scratchDir();
+  const PackageStorage in_memory = makeStorage();
+  const std::string expected = writeToString(in_memory, dir / "memory.twk");
+  for (uint64_t tail_bytes : {uint64_t(1), uint64_t(200), uint64_t(1) << 20}) {
+    for (bool pages : {false, true}) {
+      const PackageStorage spilled =
+          makeStorage(pages ? dir / "pages.spill" : std::filesystem::path(), {}, dir / "tables",
+                      tail_bytes);
+      SCOPED_TRACE("tail " + std::to_string(tail_bytes) + " pages " + std::to_string(pages));
+      EXPECT_EQ(writeToString(spilled, dir / "spilled.twk"), expected);
+      EXPECT_EQ(spilled.clusterCount(), in_memory.clusters.size());
+      EXPECT_EQ(spilled.groupCount(), 2u);
+      EXPECT_EQ(spilled.instanceCount(), 3u);
+      EXPECT_EQ(spilled.profilePointCount(), 3u);
+      EXPECT_EQ(spilled.objectCount(), 3u);
+      EXPECT_EQ(spilled.stringBytes(), in_memory.strings.size());
+      if (tail_bytes == 1) {  // everything went to the files
+        EXPECT_TRUE(spilled.clusters.empty());
+        EXPECT_TRUE(spilled.groups.empty());
+        EXPECT_TRUE(spilled.instances.empty());
+        EXPECT_TRUE(spilled.objects.empty());
+        EXPECT_TRUE(spilled.strings.empty());
+      }
+      for (uint32_t c = 0; c < spilled.clusterCount(); ++c) {
+        const ClusterRecord r = spilled.clusterRecord(c);
+        EXPECT_EQ(std::memcmp(&r, &in_memory.clusters[c], sizeof r), 0) << "cluster " << c;
+      }
+      const pkg::InstanceRecord extrusion = spilled.instanceRecord(2);
+      EXPECT_EQ(std::memcmp(&extrusion, &in_memory.instances[2], sizeof extrusion), 0);
+      std::vector<glm::vec2> points;
+      spilled.readProfilePoints(extrusion.profile_first, extrusion.profile_count, points);
+      EXPECT_EQ(points, in_memory.profile_points);
+      EXPECT_THROW(spilled.clusterRecord(spilled.clusterCount()), std::out_of_range);
+      EXPECT_THROW(spilled.readProfilePoints(2, 2, points), std::out_of_range);
+    }
+  }
+  // Spilling starts before the first record or not at all; an unwritable directory is an error
+  // naming it.
+  PackageStorage late = makeStorage();
+  EXPECT_THROW(late.spillTablesTo(dir / "late"), std::logic_error);
+  test::writeFile(dir / "a-file", "x");
+  PackageStorage nowhere;
+  try {
+    nowhere.spillTablesTo(dir / "a-file" / "tables");
+    ADD_FAILURE() << "no error for an unwritable table directory";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("a-file"), std::string::npos) << e.what();
   }
 }
 
