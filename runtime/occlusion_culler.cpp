@@ -82,6 +82,8 @@ const pkg::VisibilityCellRecord* OcclusionCuller::cellAt(const glm::dvec3& eye) 
 void OcclusionCuller::resetVisible() {
   for (uint32_t c : last_visible_list_) last_visible_[c] = 0;
   last_visible_list_.clear();
+  resting_left_ = 0;
+  poor_frames_ = 0;
 }
 
 void OcclusionCuller::splitByLastVisible(const glm::dvec3& eye, std::span<const uint32_t> cut,
@@ -89,6 +91,14 @@ void OcclusionCuller::splitByLastVisible(const glm::dvec3& eye, std::span<const 
                                          std::vector<uint32_t>& rest, FrameStats& stats) {
   pass1.clear();
   rest.clear();
+  cut_triangles_ = hidden_triangles_ = 0;
+  for (uint32_t c : cut) cut_triangles_ += view_->clusters()[c].triangle_count;
+  if (resting_left_ > 0) {
+    pass1.assign(cut.begin(), cut.end());
+    if (const pkg::VisibilityCellRecord* here = pvs_ ? cellAt(eye) : nullptr)
+      stats.view_cell = int64_t(here->grid_index);
+    return;
+  }
   // The eye's cell's occluders, mapped onto whatever LOD the cut holds (PvsMapping: the clusters
   // that stand for an occluder's surface at finer or coarser levels), join pass 1: they are
   // drawn as they are anyway, so their depth is exact.
@@ -226,6 +236,7 @@ bool OcclusionCuller::hidden(uint32_t cluster, const OcclusionFrame& frame,
 void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint32_t> rest,
                                std::vector<uint32_t>& pass2, FrameStats& stats) {
   pass2.clear();
+  if (resting_left_ > 0) return;  // rest is empty: nothing to build or test
   const int width = frame.renderer->width(), height = frame.renderer->height();
   ensureGl(width, height);
   unsigned depth_source = frame.renderer->depthTexture();
@@ -269,6 +280,7 @@ void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint
       ++stats.culled_frustum;
     } else {
       ++stats.occlusion_culled;
+      hidden_triangles_ += view_->clusters()[c].triangle_count;
     }
   }
   stats.hzb_test_ms += msSince(test_start);
@@ -280,13 +292,29 @@ void OcclusionCuller::recordVisible(const OcclusionFrame& frame, std::span<const
     last_visible_[c] = 1;
     last_visible_list_.push_back(c);
   };
-  if (hzb_options_.rebuild_from_final_depth) {
+  // Resting: only the last resting frame looks at its depth, to hand the next frame a visible set.
+  if (resting_left_ > 1) {
+    --resting_left_;
+    return;
+  }
+  const bool last_rest = resting_left_ == 1;
+  const bool rebuild = hzb_options_.rebuild_from_final_depth || last_rest;
+  if (rebuild) {
     const int width = frame.renderer->width(), height = frame.renderer->height();
     ensureGl(width, height);
     buildAndReadBack(frame.renderer->depthTexture(), width, height, stats);
   }
+  if (last_rest) {
+    resting_left_ = 0;
+    poor_frames_ = hzb_options_.rest_after_frames - 1;  // one poor frame rests again
+  } else if (hzb_options_.rest_after_frames > 0) {
+    const bool poor = double(hidden_triangles_) < hzb_options_.min_hidden_share *
+                                                      double(cut_triangles_);
+    poor_frames_ = poor ? poor_frames_ + 1 : 0;
+  }
   const auto test_start = Clock::now();
-  resetVisible();
+  for (uint32_t c : last_visible_list_) last_visible_[c] = 0;
+  last_visible_list_.clear();
   for (uint32_t c : pass1) {
     bool offscreen = false;
     if (!hidden(c, frame, offscreen)) keep(c);
@@ -294,9 +322,14 @@ void OcclusionCuller::recordVisible(const OcclusionFrame& frame, std::span<const
   for (uint32_t c : pass2) {
     bool offscreen = false;
     // Survivors of step 2 drew into the frame; only the final depth can say they are hidden.
-    if (!hzb_options_.rebuild_from_final_depth || !hidden(c, frame, offscreen)) keep(c);
+    if (!rebuild || !hidden(c, frame, offscreen)) keep(c);
   }
   stats.hzb_test_ms += msSince(test_start);
+  if (hzb_options_.rest_after_frames > 0 && poor_frames_ >= hzb_options_.rest_after_frames &&
+      hzb_options_.rest_frames > 0) {
+    resting_left_ = hzb_options_.rest_frames;
+    poor_frames_ = 0;
+  }
 }
 
 void OcclusionCuller::filterPvs(const glm::dvec3& eye, std::span<const uint32_t> cut,

@@ -100,6 +100,16 @@ struct HzbOptions {
   //   proxies reach past the true surfaces, so this loses pixels (2.5 %).
   // - None: two-pass HZB alone.
   enum class Occluders { Seed, Always, Coarse, None } occluders = Occluders::Seed;
+  // Resting: where occlusion hides little (an orbit outside the model, an open deck), the two
+  // pyramids and the box tests cost more than the triangles they save. When the clusters hidden
+  // in a frame hold less than min_hidden_share of the cut's triangles for rest_after_frames
+  // frames in a row, the culler rests for rest_frames frames: the whole cut is drawn in pass 1
+  // and nothing is built or tested (drawing everything is conservative). The last resting frame
+  // builds the final-depth pyramid once, so the next frame has a visible set and measures the
+  // share again; one poor frame after a rest starts the next rest. rest_after_frames = 0: never.
+  uint32_t rest_after_frames = 8;
+  uint32_t rest_frames = 24;
+  double min_hidden_share = 0.1;
 };
 
 // "seed", "always", "coarse", "none"; parseOccluders throws std::invalid_argument otherwise.
@@ -164,6 +174,9 @@ class OcclusionCuller {
   void filterPvs(const glm::dvec3& eye, std::span<const uint32_t> cut, std::vector<uint32_t>& out,
                  FrameStats& stats);
 
+  // True while resting (HzbOptions::rest_after_frames): this frame draws the whole cut in pass 1.
+  bool resting() const { return resting_left_ > 0; }
+
   // The pyramid of the last build (after cullRest: the occlusion depth's; after recordVisible:
   // the final depth's). For tests and debugging.
   const HzbPyramid& lastPyramid() const { return pyramid_; }
@@ -184,6 +197,12 @@ class OcclusionCuller {
   uint32_t occluder_cell_ = UINT32_MAX;  // grid index whose flags occluder_flags_ hold
   std::vector<uint8_t> occluder_flags_;
   std::vector<uint8_t> pvs_flags_;
+
+  // Resting (HzbOptions::rest_after_frames): frames left to rest, poor frames in a row, and the
+  // triangles of the cut and of what this frame hid.
+  uint32_t resting_left_ = 0;
+  uint32_t poor_frames_ = 0;
+  uint64_t cut_triangles_ = 0, hidden_triangles_ = 0;
 
   std::vector<uint8_t> last_visible_;         // per cluster: in last frame's visible set
   std::vector<uint32_t> last_visible_list_;   // the same, as a list (to clear)

@@ -104,6 +104,7 @@ WalkthroughOptions smallOptions(OcclusionMode mode) {
   options.height = 128;
   options.occlusion = mode;
   options.prefetch = false;
+  options.hzb.rest_after_frames = 0;  // the culling itself; resting has a test of its own
   return options;
 }
 
@@ -357,6 +358,57 @@ TEST_F(OcclusionCulling, SwitchingModesAtRunTime) {
   const FrameStats first = walk.renderFrame(front, 0.0);  // starts over: no pass 1
   EXPECT_EQ(first.pass1_clusters, 0u);
   EXPECT_EQ(lostPixels(walk), 0u);
+}
+
+// Resting: frames that hide too little stop building and testing pyramids for a while and draw
+// the whole cut, losing no pixel; the last resting frame hands the next a visible set, so culling
+// resumes at once where it pays.
+TEST_F(OcclusionCulling, RestsWhereOcclusionHidesTooLittleAndResumesWhereItPays) {
+  const Camera front = lookingAt(kFront, kTarget);
+  {  // Every frame counts as poor: 8 frames, then 24 resting ones, then one probe, then rest again.
+    WalkthroughOptions options = smallOptions(OcclusionMode::Hzb);
+    options.hzb.rest_after_frames = 8;
+    options.hzb.rest_frames = 24;
+    options.hzb.min_hidden_share = 2.0;
+    Walkthrough walk(wallPackage(), options);
+    settle(walk, front);  // a rest may have started while pages loaded: let it end
+    for (int i = 0; i < 30 && walk.occlusionCuller().resting(); ++i) walk.renderFrame(front, 0.0);
+    ASSERT_FALSE(walk.occlusionCuller().resting());
+    int frames_to_rest = 0;  // then a rest starts afresh
+    while (!walk.occlusionCuller().resting() && frames_to_rest < 20) {
+      walk.renderFrame(front, 0.0);
+      ++frames_to_rest;
+    }
+    ASSERT_TRUE(walk.occlusionCuller().resting());
+    EXPECT_LE(frames_to_rest, 8);
+    for (int i = 0; i < 24; ++i) {
+      const FrameStats stats = walk.renderFrame(front, 0.0);
+      EXPECT_EQ(stats.occlusion_culled, 0u) << "resting frame " << i;
+      EXPECT_EQ(stats.pass2_clusters, 0u);
+      EXPECT_EQ(stats.pass1_clusters, stats.nodes_drawn);
+      // No pyramid, except on the last resting frame (the next frame's visible set).
+      if (i < 23) EXPECT_EQ(stats.hzb_build_ms, 0.0) << "resting frame " << i;
+      else EXPECT_GT(stats.hzb_build_ms, 0.0);
+      EXPECT_EQ(lostPixels(walk), 0u) << "resting frame " << i;
+    }
+    EXPECT_FALSE(walk.occlusionCuller().resting());
+    const FrameStats probe = walk.renderFrame(front, 0.0);  // culls with last frame's set
+    EXPECT_GT(probe.occlusion_culled, 0u);
+    EXPECT_LT(probe.pass1_clusters, probe.nodes_drawn + probe.occlusion_culled);
+    EXPECT_EQ(lostPixels(walk), 0u);
+    EXPECT_TRUE(walk.occlusionCuller().resting()) << "one poor frame after a rest rests again";
+  }
+  {  // The defaults: the wall hides most of the cut, so the culler never rests.
+    WalkthroughOptions options = smallOptions(OcclusionMode::Hzb);
+    options.hzb = HzbOptions{};
+    Walkthrough walk(wallPackage(), options);
+    settle(walk, front);
+    for (int i = 0; i < 40; ++i) {
+      const FrameStats stats = walk.renderFrame(front, 0.0);
+      EXPECT_FALSE(walk.occlusionCuller().resting()) << "frame " << i;
+      EXPECT_GT(stats.occlusion_culled, 0u) << "frame " << i;
+    }
+  }
 }
 
 }  // namespace
