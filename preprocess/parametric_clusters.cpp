@@ -19,12 +19,12 @@ uint64_t spread21(uint64_t x) {
   return x;
 }
 
-uint64_t morton63(const glm::vec3& unit) {
+}  // namespace
+
+uint64_t parametricMortonCode(const glm::vec3& unit) {
   auto q = [](float f) { return uint64_t(std::clamp(f, 0.0f, 1.0f) * 2097151.0f); };
   return spread21(q(unit.x)) | (spread21(q(unit.y)) << 1) | (spread21(q(unit.z)) << 2);
 }
-
-}  // namespace
 
 ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
                                        glm::dvec3 package_origin, uint32_t max_per_cluster) {
@@ -63,7 +63,7 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
   };
   std::vector<Key> keys(items.size());
   for (size_t i = 0; i < items.size(); ++i)
-    keys[i] = {uint32_t(items[i].primitive.index()), morton63((centers[i] - lo) / extent),
+    keys[i] = {uint32_t(items[i].primitive.index()), parametricMortonCode((centers[i] - lo) / extent),
                uint32_t(i)};
   std::sort(keys.begin(), keys.end(), [](const Key& a, const Key& b) {
     if (a.type != b.type) return a.type < b.type;

@@ -48,6 +48,10 @@ struct ParametricClustering {
   size_t clusterCount() const { return types.size(); }
 };
 
+// The 63-bit Morton code of a point in the unit cube (21 bits per axis, clamped): the order of
+// items of one type (shared with the out-of-core clustering, parametric_external_sort.h).
+uint64_t parametricMortonCode(const glm::vec3& unit);
+
 // Groups `items` into clusters of at most max_per_cluster instances (see the file comment).
 // Box centres are computed in the frame of `package_origin`. Throws std::invalid_argument if
 // max_per_cluster is 0 or an item has parameters the format forbids (tws::primitiveProblem).

@@ -20,6 +20,7 @@
 #include "package_view.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
+#include "parametric_external_sort.h"
 #include "quantization_snap.h"
 #include "scene_bricking.h"
 #include "visibility_build.h"
@@ -400,13 +401,23 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
                          placement, storage);
     upper = ClusterDag{};
   }
-  std::vector<ParametricItem> items;
-  items.reserve(scene.parametric_count);
-  forEachParametricBatch(scene, 4096, [&](std::span<const ParametricRecord> batch) {
-    for (const ParametricRecord& r : batch) items.push_back({r.object, r.primitive, r.transform});
-  });
-  ParametricClustering clustering = clusterPrimitives(items, storage.origin);
-  report.parametric_clusters = addParametricClusters(items, clustering, storage).size();
+  // Parametric clusters out of core: sorted runs within budget / 8, merged into the storage.
+  ParametricSortOptions sort_options;
+  sort_options.work_dir = bricking.work_dir / "parametric-runs";
+  sort_options.memory_budget_bytes = std::max<uint64_t>(options.memory_budget_bytes / 8, 1u << 20);
+  const ParametricStream parametrics =
+      [&](const std::function<void(std::span<const ParametricItem>)>& sink) {
+        std::vector<ParametricItem> items;
+        forEachParametricBatch(scene, 4096, [&](std::span<const ParametricRecord> batch) {
+          items.clear();
+          for (const ParametricRecord& r : batch)
+            items.push_back({r.object, r.primitive, r.transform});
+          sink(items);
+        });
+      };
+  const ParametricSortStats sorted = addParametricClustersOutOfCore(parametrics, sort_options, storage);
+  report.parametric_clusters = sorted.clusters;
+  report.parametric_sort_runs = sorted.runs;
   endStage(progress);
 
   // 5. One file, written atomically; with visibility, first inside the work directory, so the

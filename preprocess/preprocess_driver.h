@@ -78,6 +78,7 @@ struct PreprocessReport {
   uint32_t bricks_resolved = 0;        // brick snapping solved again (a re-read each)
   uint64_t clusters = 0;
   uint64_t parametric_clusters = 0;
+  uint32_t parametric_sort_runs = 0;  // sorted runs the parametric clustering spilled (0: in memory)
   uint64_t package_bytes = 0;
   VisibilitySummary visibility;
   uint64_t peak_rss_bytes = 0;

@@ -36,9 +36,9 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
   std::printf("  levels      %zu:", r.triangles_per_level.size());
   for (uint64_t t : r.triangles_per_level) std::printf(" %llu", static_cast<unsigned long long>(t));
   std::printf(" triangles (root %llu)\n", static_cast<unsigned long long>(r.root_triangles));
-  std::printf("  clusters    %llu mesh, %llu parametric\n",
+  std::printf("  clusters    %llu mesh, %llu parametric (%u sorted runs on disk)\n",
               static_cast<unsigned long long>(r.clusters),
-              static_cast<unsigned long long>(r.parametric_clusters));
+              static_cast<unsigned long long>(r.parametric_clusters), r.parametric_sort_runs);
   for (const StageTime& s : r.stages) std::printf("  %-12s%8.2f s\n", s.name.c_str(), s.seconds);
   std::printf("  total       %8.2f s, %.2f M input triangles/s\n", r.seconds,
               r.seconds > 0 ? double(r.input_triangles) / r.seconds / 1e6 : 0.0);
