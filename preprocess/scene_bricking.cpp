@@ -18,6 +18,7 @@
 #include "byte_packing.h"
 #include "file_reader.h"
 #include "format_error.h"
+#include "nurbs_conforming.h"
 #include "position_key.h"
 #include "scene_io.h"
 #include "scene_stats.h"
@@ -341,7 +342,7 @@ class BrickingSink : public SceneSink {
       addMesh(*mesh, t, dense);
     } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&object.geometry)) {
       TriangleMesh tessellated;
-      tessellateNurbs(*nurbs, options_.nurbs_tolerance, tessellated);
+      tessellateNurbsConforming(*nurbs, options_.nurbs_tolerance, tessellated);
       addMesh(tessellated, t, dense);
     } else {
       ByteWriter w;
