@@ -72,6 +72,11 @@ Walkthrough::Walkthrough(const std::filesystem::path& package, const Walkthrough
   renderer_->setObjectColors(objectColors(*view_));
   culler_ = std::make_unique<OcclusionCuller>(*view_);
   culler_->setHzbOptions(options_.hzb);
+  parametric_ = std::make_unique<ParametricRenderer>(*view_, *renderer_, options_.parametric_meshes);
+  options_.parametrics = resolveParametricMode(options_.parametrics);
+  for (uint32_t c = 0; c < view_->clusters().size(); ++c)
+    if (view_->clusters()[c].kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+      all_parametric_.push_back(c);
 
   // The only wait of the run: the pinned pages, so the first frame shows the whole model.
   pager_->pin(pinned);
@@ -117,11 +122,29 @@ void Walkthrough::appendItems(std::span<const uint32_t> clusters, const glm::dve
   for (uint32_t c : clusters) items.push_back(makeDrawItem(pager_->gpuCluster(c), eye));
 }
 
+void Walkthrough::drawParametrics(FrameStats* stats) {
+  if (options_.parametrics == ParametricMode::Off) {
+    if (stats) stats->parametric_skipped = uint32_t(last_parametric_.size());
+    return;
+  }
+  const ParametricDrawStats drawn =
+      parametric_->draw(last_parametric_, last_parametric_view_, options_.parametrics, frame_);
+  if (stats) {
+    stats->parametric_clusters_drawn = drawn.clusters_drawn;
+    stats->parametric_instances_drawn = drawn.instances_drawn;
+    stats->parametric_triangles = drawn.mesh_triangles;
+    stats->parametric_cpu_ms = drawn.cpu_ms;
+  }
+}
+
 uint64_t Walkthrough::redrawUnculled() {
   items_.clear();
   appendItems(full_order_, last_eye_, items_);
   renderer_->beginFrame(last_rotation_, last_projection_);
-  renderer_->draw(*pool_, items_);
+  const size_t first = std::min(full_order_pass1_, items_.size());
+  renderer_->draw(*pool_, std::span<const DrawItem>(items_).first(first));
+  drawParametrics(nullptr);
+  renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(first));
   const RenderStats render_stats = renderer_->endFrame();
   glFinish();
   return render_stats.triangles;
@@ -186,10 +209,17 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     stats.nodes_visited = cut_result_.stats.groups_visited + cut_result_.stats.clusters_tested;
     stats.culled_frustum = cut_result_.stats.culled_frustum;
     stats.culled_small = cut_result_.stats.culled_small;
-    stats.parametric_skipped = uint32_t(cut_result_.parametric_clusters.size());
     stats.ancestor_fallbacks = cut_result_.stats.groups_blocked;
   }
   stats.cpu_cut_ms = msSince(cut_start);
+  const std::vector<uint32_t>& parametric_list =
+      options_.reference ? all_parametric_ : cut_result_.parametric_clusters;
+  last_parametric_.assign(parametric_list.begin(), parametric_list.end());
+  last_parametric_view_.eye = eye;
+  last_parametric_view_.forward = camera.forward();
+  last_parametric_view_.near_m = camera.near_m;
+  last_parametric_view_.pixel_scale = camera.pixelScale(renderer_->height());
+  last_parametric_view_.min_feature_px = options_.reference ? 0.0 : options_.min_feature_px;
   last_position_ = camera.position;
   last_time_s_ = time_s;
 
@@ -213,6 +243,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     culler_->splitByLastVisible(eye, *draw_list, pass1_, rest_, stats);
     appendItems(pass1_, eye, items_);
     renderer_->draw(*pool_, items_);
+    drawParametrics(&stats);  // with pass 1: their depth goes into the HZB
     culler_->cullRest(frame, rest_, pass2_, stats);
     const size_t pass1_items = items_.size();
     appendItems(pass2_, eye, items_);
@@ -221,6 +252,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     stats.pass1_clusters = uint32_t(pass1_.size());
     stats.pass2_clusters = uint32_t(pass2_.size());
     full_order_.assign(pass1_.begin(), pass1_.end());
+    full_order_pass1_ = pass1_.size();
     full_order_.insert(full_order_.end(), rest_.begin(), rest_.end());
   } else {
     const std::vector<uint32_t>* list = draw_list;
@@ -230,7 +262,9 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     }
     appendItems(*list, eye, items_);
     renderer_->draw(*pool_, items_);
+    drawParametrics(&stats);
     full_order_.assign(draw_list->begin(), draw_list->end());
+    full_order_pass1_ = full_order_.size();
   }
   for (const DrawItem& item : items_) stats.triangles_drawn += item.placement.triangle_count;
   stats.nodes_drawn = uint32_t(items_.size());

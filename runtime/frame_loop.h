@@ -7,8 +7,10 @@
 // resident ancestors standing in for missing pages) and request the missing pages by priority;
 // prefetch along the camera's velocity (a second, draw-less cut from where the camera will be);
 // cull the cut by occlusion (mode hzb: view-cell occluders and two-pass hierarchical Z; pvs: the
-// cell's sampled visible set; runtime/occlusion_culler.h) and draw it with multi-draws; adapt tau
-// to --target-fps. Nothing here waits for I/O except the constructor, which loads the root pages
+// cell's sampled visible set; runtime/occlusion_culler.h) and draw it with multi-draws; draw the
+// cut's parametric clusters (parametric_renderer.h; in hzb mode with pass 1, so their depth is
+// in the pyramid: decks and walls are boxes, the plant's best occluders); adapt tau to
+// --target-fps. Nothing here waits for I/O except the constructor, which loads the root pages
 // once (a few, whatever the model size) so the first frame is never empty. (hzb waits for the
 // GPU: it reads the pyramid back in the middle of the frame.)
 #pragma once
@@ -24,6 +26,7 @@
 #include "occlusion_culler.h"
 #include "package_view.h"
 #include "pager.h"
+#include "parametric_renderer.h"
 
 namespace tw {
 
@@ -42,6 +45,11 @@ struct WalkthroughOptions {
   double target_fps = 0.0;       // > 0: adapt tau to hold this frame rate
   double min_tau_px = 0.25, max_tau_px = 64.0;
   bool finish_each_frame = true;  // glFinish so frame_ms includes the GPU (headless timing)
+  // Parametric clusters of the cut (reference: all of them): ray-cast impostors, run-time meshes
+  // by distance, or not drawn (counted in FrameStats::parametric_skipped); auto picks by the GL
+  // renderer (parametric_renderer.h). docs/parametrics.md.
+  ParametricMode parametrics = ParametricMode::Auto;  // resolved by the constructor
+  ParametricMeshOptions parametric_meshes;
   // Replaces the package as page source (tests: a deliberately slow reader).
   std::function<std::unique_ptr<PageSource>(const PackageView&)> page_source;
 };
@@ -79,6 +87,9 @@ class Walkthrough {
   double tau() const { return tau_px_; }
   void setTau(double tau_px) { tau_px_ = tau_px; }
   void setMinFeaturePx(double px) { options_.min_feature_px = px; }
+  ParametricMode parametrics() const { return options_.parametrics; }
+  void setParametrics(ParametricMode mode) { options_.parametrics = resolveParametricMode(mode); }
+  ParametricRenderer& parametricRenderer() { return *parametric_; }
   // World bounds of the model (double), for cameras and paths.
   glm::dvec3 worldMin() const;
   glm::dvec3 worldMax() const;
@@ -89,6 +100,8 @@ class Walkthrough {
   void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                    std::vector<DrawItem>& items) const;
   void adaptTau(double frame_ms);
+  // Draws last_parametric_ with the last frame's camera; adds to `stats` when given.
+  void drawParametrics(FrameStats* stats);
 
   WalkthroughOptions options_;
   std::unique_ptr<PackageView> view_;
@@ -100,6 +113,11 @@ class Walkthrough {
   CutResult cut_result_, prefetch_result_;
   std::vector<DrawItem> items_;
   std::unique_ptr<OcclusionCuller> culler_;
+  std::unique_ptr<ParametricRenderer> parametric_;
+  std::vector<uint32_t> all_parametric_;   // reference mode: every parametric cluster
+  std::vector<uint32_t> last_parametric_;  // the last frame's parametric clusters
+  ParametricView last_parametric_view_;
+  size_t full_order_pass1_ = 0;  // hzb: parametrics were drawn after this many of full_order_
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
   std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn
   glm::dvec3 last_eye_{0.0};          // package frame

@@ -33,6 +33,10 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("culled_frustum", s.culled_frustum);
   visit("culled_small", s.culled_small);
   visit("parametric_skipped", s.parametric_skipped);
+  visit("parametric_clusters_drawn", s.parametric_clusters_drawn);
+  visit("parametric_instances_drawn", s.parametric_instances_drawn);
+  visit("parametric_triangles", s.parametric_triangles);
+  visit("parametric_cpu_ms", s.parametric_cpu_ms);
   visit("pages_resident", s.pages_resident);
   visit("pages_requested", s.pages_requested);
   visit("pages_loaded", s.pages_loaded);

@@ -22,7 +22,12 @@ struct FrameStats {
   uint64_t triangles_drawn = 0;
   uint32_t culled_frustum = 0;
   uint32_t culled_small = 0;
-  uint32_t parametric_skipped = 0;  // visible parametric clusters not drawn (no shaders yet)
+  // Parametric clusters of the cut (parametric_renderer.h): drawn, or not drawn (mode off).
+  uint32_t parametric_skipped = 0;          // visible parametric clusters not drawn: 0 unless off
+  uint32_t parametric_clusters_drawn = 0;
+  uint64_t parametric_instances_drawn = 0;  // submitted, before per-instance small-feature culling
+  uint64_t parametric_triangles = 0;        // of run-time meshes (tessellated mode, extrusions...)
+  double parametric_cpu_ms = 0.0;           // CPU time to submit them (and build new meshes)
   uint32_t pages_resident = 0;
   uint32_t pages_requested = 0;     // in the queue at the end of the frame
   uint32_t pages_loaded = 0;        // uploaded this frame

@@ -46,6 +46,7 @@ struct GlRenderer::Impl {
   GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
   uint32_t object_color_count = 0;
+  glm::mat4 view_projection{1.0f};
 
   // Scratch reused every draw, so steady frames do not allocate.
   std::vector<gl::DrawElementsIndirectCommand> commands;
@@ -202,6 +203,9 @@ int GlRenderer::width() const { return impl_->options.width; }
 int GlRenderer::height() const { return impl_->options.height; }
 unsigned GlRenderer::framebuffer() const { return impl_->fbo; }
 unsigned GlRenderer::depthTexture() const { return impl_->depth; }
+unsigned GlRenderer::objectColorBuffer() const { return impl_->color_buffer; }
+uint32_t GlRenderer::objectColorCount() const { return impl_->object_color_count; }
+const glm::mat4& GlRenderer::viewProjection() const { return impl_->view_projection; }
 
 void GlRenderer::resize(int width, int height) {
   if (width == impl_->options.width && height == impl_->options.height && impl_->fbo != 0) return;
@@ -244,6 +248,7 @@ void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& pro
   glClearNamedFramebufferfv(s.fbo, GL_DEPTH, 0, &far_depth);
 
   const glm::mat4 view_projection = projection * view_rotation;
+  s.view_projection = view_projection;
   glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
                             &view_projection[0][0]);
   glProgramUniformMatrix4fv(s.depth_program, gl::kViewProjectionLocation, 1, GL_FALSE,

@@ -106,6 +106,12 @@ class GlRenderer {
   // GL names, for passes that render into or read the same targets (e.g. occlusion, overlays).
   unsigned framebuffer() const;
   unsigned depthTexture() const;  // GL_DEPTH_COMPONENT32F, reversed Z (1 near, 0 far/empty)
+  // For other surface passes that colour objects the same way (parametric_renderer.h): the
+  // object colour SSBO (uint 0xAABBGGRR per object, bind at gl_shaders.h kObjectColorBinding),
+  // its entry count, and projection * view rotation of the last beginFrame.
+  unsigned objectColorBuffer() const;
+  uint32_t objectColorCount() const;
+  const glm::mat4& viewProjection() const;
 
  private:
   uint64_t prepareDraws(const GeometryPool& pool, std::span<const DrawItem> items);

@@ -89,39 +89,53 @@ void main() {
 )";
 }
 
-inline std::string meshFragmentShader() {
-  return R"(#version 450 core
-// Object from the per-triangle pool (gl_PrimitiveID restarts at 0 for every draw of a
-// multi-draw), colour from the object table, a face normal from screen-space derivatives (the
-// package stores none), and sky/ground hemispheric plus sun and head light. Two-sided: the normal
-// is turned toward the eye, because CAD surfaces are often open.
-in vec3 pos_eye;
-flat in uint first_triangle;
-layout(std430, binding = 1) readonly buffer TriangleObjects { uint tri_objects[]; };
+// The colour and lighting every surface pass shares (meshes, parametric impostors and
+// tessellated parametrics), so the same object looks the same whichever way it is drawn: colour
+// from the object table (grey when absent), sky/ground hemispheric plus sun and head light,
+// two-sided (the normal is turned toward the eye, because CAD surfaces are often open).
+// Needs `object_colors` (binding 2) and the `object_color_count` uniform (location 1) declared
+// by the including shader's preamble below.
+inline std::string shadingGlsl() {
+  return R"(
 layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
 layout(location = 1) uniform uint object_color_count;
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out uint out_id;
-
 const vec3 kSunDir = normalize(vec3(0.35, 0.25, 0.90));  // world (eye-relative axes are world axes)
 const vec3 kSky = vec3(0.80, 0.86, 0.95);
 const vec3 kGround = vec3(0.30, 0.27, 0.24);
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
-
-void main() {
-  uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
+vec4 objectBaseColor(uint object) {
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
-  vec4 base = rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
+  return rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
+}
+// n: unit normal (either side), pos_eye: the shaded point relative to the eye.
+vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
   vec3 to_eye = -pos_eye;
-  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
-  float len = length(n);
-  n = len > 1e-30 ? n / len : normalize(to_eye);
   if (dot(n, to_eye) < 0.0) n = -n;
   vec3 v = normalize(to_eye);
   vec3 light = mix(kGround, kSky, 0.5 + 0.5 * n.z) * 0.55
              + vec3(0.50) * max(dot(n, kSunDir), 0.0)
              + vec3(0.22) * max(dot(n, v), 0.0);
-  out_color = vec4(min(base.rgb * light, vec3(1.0)), 1.0);
+  return vec4(min(base.rgb * light, vec3(1.0)), 1.0);
+}
+)";
+}
+
+inline std::string meshFragmentShader() {
+  return std::string(R"(#version 450 core
+// Object from the per-triangle pool (gl_PrimitiveID restarts at 0 for every draw of a
+// multi-draw) and a face normal from screen-space derivatives (the package stores none).
+in vec3 pos_eye;
+flat in uint first_triangle;
+layout(std430, binding = 1) readonly buffer TriangleObjects { uint tri_objects[]; };
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+)") + shadingGlsl() + R"(
+void main() {
+  uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
+  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
+  float len = length(n);
+  n = len > 1e-30 ? n / len : normalize(-pos_eye);
+  out_color = shadeSurface(objectBaseColor(object), n, pos_eye);
   out_id = object + 1u;
 }
 )";

@@ -5,7 +5,9 @@
 // brute-force baseline that `terawalk compare` measures fidelity against. `--occlusion` picks the
 // occlusion culling (off, hzb, pvs); `--check-occlusion` draws every frame's cut a second time
 // without occlusion culling and counts the pixels whose object id differs (the loss culling
-// caused, exact, at the same LOD).
+// caused, exact, at the same LOD). `--parametrics` picks how parametric objects are drawn:
+// ray-cast impostors, run-time meshes by distance, not at all, or auto (the default: by the GL
+// renderer, docs/parametrics.md).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -49,6 +51,8 @@ struct RenderArgs {
   bool no_prefetch = false;
   bool no_frustum = false;
   std::string occlusion = "hzb";
+  std::string parametrics = "auto";
+  double parametric_tolerance_m = 0.0;
   bool check_occlusion = false;
   int hzb_read_width = kMaxTestLevelWidthPx;
   bool hzb_final_rebuild = true;
@@ -96,6 +100,8 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.prefetch = !args.no_prefetch;
   options.frustum_cull = !args.no_frustum;
   options.occlusion = parseOcclusionMode(args.occlusion);
+  options.parametrics = parseParametricMode(args.parametrics);
+  options.parametric_meshes.fixed_tolerance_m = args.parametric_tolerance_m;
   options.hzb.read_width_px = args.hzb_read_width;
   options.hzb.rebuild_from_final_depth = args.hzb_final_rebuild;
   options.hzb.build = parseHzbBuild(args.hzb_build);
@@ -198,6 +204,15 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
                          })->triangles_drawn},
       {"frames_with_ancestor_fallback", fallback_frames},
       {"occlusion", args.reference ? "off" : args.occlusion},
+      {"parametrics", parametricModeName(walk.parametrics())},
+      {"median_parametric_clusters_drawn",
+       medianOf(all, [](const FrameStats& f) { return f.parametric_clusters_drawn; })},
+      {"median_parametric_instances_drawn",
+       medianOf(all, [](const FrameStats& f) { return f.parametric_instances_drawn; })},
+      {"median_parametric_triangles",
+       medianOf(all, [](const FrameStats& f) { return f.parametric_triangles; })},
+      {"median_parametric_skipped",
+       medianOf(all, [](const FrameStats& f) { return f.parametric_skipped; })},
       {"hzb_read_width_px", args.hzb_read_width},
       {"hzb_final_rebuild", args.hzb_final_rebuild},
       {"hzb_build", args.hzb_build},
@@ -287,6 +302,16 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--no-prefetch", args->no_prefetch, "Do not prefetch along the camera's velocity");
   cmd->add_flag("--no-frustum", args->no_frustum,
                 "No frustum culling: LOD alone (benchmarks measure each technique's share)");
+  cmd->add_option("--parametrics", args->parametrics,
+                  "Parametric objects: impostor (ray-cast in the fragment shader), tessellated "
+                  "(meshes built by distance at run time), off (not drawn), auto (tessellated "
+                  "on llvmpipe, where it measured faster; impostor on GPUs)")
+      ->check(CLI::IsMember({"impostor", "tessellated", "off", "auto"}))
+      ->capture_default_str();
+  cmd->add_option("--parametric-tolerance", args->parametric_tolerance_m,
+                  "tessellated (and extrusions, revolutions): one fixed chordal tolerance in "
+                  "metres instead of distance buckets (fine references)")
+      ->check(CLI::Range(0.0, 10.0));
   cmd->add_option("--occlusion", args->occlusion,
                   "Occlusion culling: off, hzb (view-cell occluders + two-pass HZB), pvs "
                   "(sampled visible sets)")

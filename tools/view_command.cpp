@@ -5,7 +5,8 @@
 // model's centre, a screenshot key (F12), a camera-path recorder (R starts and stops; the path is
 // written in the documented text format) and replay (--path). An ImGui overlay shows the frame
 // statistics and sets tau, field of view, near/far, the small-feature threshold and the occlusion
-// mode (off, hzb, pvs; --occlusion picks the first) at run time.
+// mode (off, hzb, pvs; --occlusion picks the first) and the parametrics mode (impostor,
+// tessellated, off; --parametrics picks the first, auto by default, P cycles) at run time.
 // The same Walkthrough as `terawalk render` draws every frame.
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
@@ -41,6 +42,7 @@ struct ViewArgs {
   int frames = 0;  // > 0: quit after this many frames (scripted runs, tests)
   std::string screenshot;  // with --frames: write the last frame here
   std::string occlusion = "hzb";
+  std::string parametrics = "auto";
 };
 
 struct GlfwSession {
@@ -134,6 +136,7 @@ void runView(const ViewArgs& args) {
     options.target_fps = args.target_fps;
     options.finish_each_frame = false;
     options.occlusion = parseOcclusionMode(args.occlusion);
+    options.parametrics = parseParametricMode(args.parametrics);
     options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
     Walkthrough walk(args.file, options);
 
@@ -162,6 +165,7 @@ void runView(const ViewArgs& args) {
     float near_m = float(camera.near_m), far_m = float(camera.far_m);
     float min_feature = 1.0f;
     int occlusion_mode = static_cast<int>(options.occlusion);
+    int parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
     int shot = 0;
     bool key_latch[512] = {};
     auto pressed = [&](int key) {
@@ -186,6 +190,7 @@ void runView(const ViewArgs& args) {
         nav.orbit = !nav.orbit;
         if (nav.orbit) nav.orbit_distance = glm::length(camera.position - nav.orbit_target);
       }
+      if (pressed(GLFW_KEY_P)) parametric_mode = (parametric_mode + 1) % 3;
       if (pressed(GLFW_KEY_R)) {
         recording_on = !recording_on;
         if (!recording_on && !recording.keys.empty()) {
@@ -216,6 +221,7 @@ void runView(const ViewArgs& args) {
       if (options.target_fps <= 0.0) walk.setTau(tau);
       walk.setMinFeaturePx(min_feature);
       walk.setOcclusion(static_cast<OcclusionMode>(occlusion_mode));
+      walk.setParametrics(static_cast<ParametricMode>(parametric_mode));
       stats = walk.renderFrame(camera, t);
       tau = float(walk.tau());
 
@@ -244,6 +250,11 @@ void runView(const ViewArgs& args) {
                   stats.occlusion_culled, stats.pass1_clusters, stats.pass2_clusters,
                   stats.occluders_drawn, static_cast<long long>(stats.view_cell));
       ImGui::Text("HZB build %.2f ms   test %.2f ms", stats.hzb_build_ms, stats.hzb_test_ms);
+      ImGui::Text("parametric clusters %u   instances %llu   mesh triangles %llu   %.2f ms",
+                  stats.parametric_clusters_drawn,
+                  static_cast<unsigned long long>(stats.parametric_instances_drawn),
+                  static_cast<unsigned long long>(stats.parametric_triangles),
+                  stats.parametric_cpu_ms);
       if (stats.parametric_skipped > 0)
         ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
                            stats.parametric_skipped);
@@ -256,6 +267,10 @@ void runView(const ViewArgs& args) {
                     int(OcclusionMode::Pvs) == 2, "the combo lists the modes in enum order");
       const char* const occlusion_names[] = {"off", "hzb", "pvs"};
       ImGui::Combo("occlusion", &occlusion_mode, occlusion_names, 3);
+      static_assert(int(ParametricMode::Impostor) == 0 && int(ParametricMode::Tessellated) == 1 &&
+                    int(ParametricMode::Off) == 2, "the combo lists the modes in enum order");
+      const char* const parametric_names[] = {"impostor", "tessellated", "off"};
+      ImGui::Combo("parametrics [P]", &parametric_mode, parametric_names, 3);
       ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
                   nav.orbit ? "orbit" : "walk", nav.speed_mps, recording_on ? " (on)" : "");
       ImGui::End();
@@ -296,6 +311,11 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--screenshot", args->screenshot, "With --frames: save the last frame here");
   cmd->add_option("--occlusion", args->occlusion, "Occlusion culling at start: off, hzb, pvs")
       ->check(CLI::IsMember({"off", "hzb", "pvs"}))
+      ->capture_default_str();
+  cmd->add_option("--parametrics", args->parametrics,
+                  "Parametric objects at start: impostor, tessellated, off, auto (tessellated on "
+                  "llvmpipe, impostor on GPUs; P cycles)")
+      ->check(CLI::IsMember({"impostor", "tessellated", "off", "auto"}))
       ->capture_default_str();
   cmd->callback([args] { runView(*args); });
 }

@@ -1,0 +1,91 @@
+// Parametric instances turned into triangles at run time, by distance (`--parametrics
+// tessellated`, and the extrusions and revolutions of impostor mode, which have no ray-cast
+// shader).
+//
+// Why: ENVIRON kept pipes parametric and built their meshes at a level of detail chosen by
+// distance; this is that path, for comparison with the impostors and for GPUs whose fragment
+// throughput is poor. Each parametric cluster is tessellated whole (formats/tessellate.h, in the
+// canonical frames of scene.h, then placed) at one of kBucketCount chordal tolerances,
+// kBaseToleranceM * 4^bucket: the coarsest whose error projects to at most tolerance_px pixels at
+// the cluster's nearest point. Meshes are cached per (cluster, bucket) in GL buffers, with
+// positions in float metres relative to the cluster's anchor (its bounding-sphere centre; the
+// anchor's offset from the eye is computed in double per draw), and evicted least recently used
+// past budget_bytes. Builds cost CPU time on the render thread: after build_ms_per_frame, a
+// cluster that already has another bucket cached draws that one instead (never a hole).
+// Needs a current GL 4.5 context for the object's whole life.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "package_view.h"
+#include "scene.h"
+
+namespace tw {
+
+struct ParametricMeshOptions {
+  double tolerance_px = 0.5;          // chordal error allowed on screen, pixels
+  uint64_t budget_bytes = 256ull << 20;  // GL buffers of cached meshes
+  double build_ms_per_frame = 30.0;   // CPU time for new meshes per frame, see above
+  double fixed_tolerance_m = 0.0;     // > 0: every cluster at this tolerance (tests, references)
+};
+
+// One vertex of a tessellated cluster: 16 bytes.
+struct ParametricVertex {
+  glm::vec3 position;  // metres from the cluster's anchor
+  uint32_t object;     // object index
+};
+
+// The scene.h primitive an instance record stands for (parameters as in package_format.h).
+Primitive primitiveOf(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points);
+
+// Appends the triangles of every instance of parametric cluster `cluster` at chordal tolerance
+// `tolerance_m`, placed relative to the cluster's anchor. Instances whose parameters
+// tessellate to nothing (invalid) add nothing. Throws std::out_of_range for a cluster that is not
+// parametric or out of range.
+void tessellateCluster(const PackageView& view, uint32_t cluster, float tolerance_m,
+                       std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices);
+
+// The anchor of a parametric cluster: its bounding-sphere centre, package frame metres.
+glm::dvec3 clusterAnchor(const pkg::ClusterRecord& cluster);
+
+struct ParametricMeshStats {
+  uint32_t clusters_drawn = 0;
+  uint64_t instances_drawn = 0;
+  uint64_t triangles_drawn = 0;
+  uint32_t meshes_built = 0;      // this call
+  uint32_t meshes_cached = 0;     // after this call
+  uint64_t cached_bytes = 0;
+};
+
+class ParametricMeshes {
+ public:
+  static constexpr int kBucketCount = 6;
+  static constexpr double kBaseToleranceM = 0.001;  // bucket 0: 1 mm; bucket 5: 1.024 m
+
+  ParametricMeshes(const PackageView& view, const ParametricMeshOptions& options);
+  ~ParametricMeshes();
+  ParametricMeshes(const ParametricMeshes&) = delete;
+  ParametricMeshes& operator=(const ParametricMeshes&) = delete;
+
+  static double bucketToleranceM(int bucket);
+  // The bucket for `cluster` seen from `eye` (package frame) with Camera::pixelScale.
+  int bucketFor(uint32_t cluster, const glm::dvec3& eye, double pixel_scale, double near_m) const;
+
+  // Draws `clusters` (parametric cluster indices) into the currently bound framebuffer with the
+  // GL state the caller set (depth test, viewport), binding its own program and the object
+  // colours the caller bound at gl_shaders.h kObjectColorBinding. `frame` orders the LRU.
+  ParametricMeshStats draw(std::span<const uint32_t> clusters, const glm::dvec3& eye,
+                           const glm::mat4& view_projection, double pixel_scale, double near_m,
+                           uint32_t object_color_count, uint64_t frame);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tw

@@ -1,0 +1,356 @@
+// The parametric impostor renderer: resident instance table, per-frame indirect commands by type,
+// one multi-draw per type. The contract is in parametric_renderer.h, the shaders in
+// parametric_shaders.h, the shared records in parametric_gpu.h.
+#include "parametric_renderer.h"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "gl_program.h"
+#include "parametric_gpu.h"
+#include "parametric_shaders.h"
+
+namespace tw {
+
+const char* parametricModeName(ParametricMode mode) {
+  switch (mode) {
+    case ParametricMode::Impostor: return "impostor";
+    case ParametricMode::Tessellated: return "tessellated";
+    case ParametricMode::Off: return "off";
+    case ParametricMode::Auto: return "auto";
+  }
+  return "?";
+}
+
+ParametricMode resolveParametricMode(ParametricMode mode) {
+  if (mode != ParametricMode::Auto) return mode;
+  const GLubyte* renderer = glGetString(GL_RENDERER);
+  const std::string name = renderer ? reinterpret_cast<const char*>(renderer) : "";
+  const bool software = name.find("llvmpipe") != std::string::npos ||
+                        name.find("softpipe") != std::string::npos;
+  return software ? ParametricMode::Tessellated : ParametricMode::Impostor;
+}
+
+ParametricMode parseParametricMode(std::string_view name) {
+  if (name == "impostor") return ParametricMode::Impostor;
+  if (name == "tessellated") return ParametricMode::Tessellated;
+  if (name == "off") return ParametricMode::Off;
+  if (name == "auto") return ParametricMode::Auto;
+  throw std::invalid_argument("unknown parametrics mode '" + std::string(name) +
+                              "' (impostor, tessellated, off, auto)");
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr uint32_t kImpostorTypes = 5;        // cylinder, cone, sphere, torus, box
+constexpr uint32_t kBoxVertices = 36;    // a box as a triangle list (boxes: flat face normals)
+constexpr uint32_t kStripVertices = 14;  // a box as one strip (the ray-cast proxies)
+
+// GL's command for glMultiDrawArraysIndirect.
+struct DrawArraysIndirectCommand {
+  uint32_t count;
+  uint32_t instance_count;
+  uint32_t first;
+  uint32_t base_instance;
+};
+static_assert(sizeof(DrawArraysIndirectCommand) == 16);
+
+bool positive(float v) { return std::isfinite(v) && v > 0.0f; }
+
+// The canonical-frame proxy box of an instance; false for parameters the shaders cannot draw
+// (the instance is then left degenerate: it rasterizes nothing).
+bool localBox(const pkg::InstanceRecord& in, glm::vec3& lo, glm::vec3& hi) {
+  const float* p = in.params;
+  switch (static_cast<pkg::PrimitiveType>(in.type)) {
+    case pkg::PrimitiveType::Cylinder:
+      if (!positive(p[0]) || !positive(p[1])) return false;
+      lo = {-p[0], -p[0], 0.0f};
+      hi = {p[0], p[0], p[1]};
+      return true;
+    case pkg::PrimitiveType::Cone: {
+      if (!(p[0] >= 0.0f) || !(p[1] >= 0.0f) || !positive(p[2]) || !positive(std::max(p[0], p[1])))
+        return false;
+      const float r = std::max(p[0], p[1]);
+      lo = {-r, -r, 0.0f};
+      hi = {r, r, p[2]};
+      return true;
+    }
+    case pkg::PrimitiveType::Sphere:
+      if (!positive(p[0])) return false;
+      lo = glm::vec3(-p[0]);
+      hi = glm::vec3(p[0]);
+      return true;
+    case pkg::PrimitiveType::TorusSegment: {
+      const float major = p[0], minor = p[1], sweep = p[2];
+      if (!positive(major) || !positive(minor) || minor >= major || !positive(sweep)) return false;
+      // The annular sector's box: its end directions and the axis directions it sweeps over, at
+      // both radii; the tube adds +-minor in z.
+      glm::vec2 a(std::numeric_limits<float>::max()), b(-std::numeric_limits<float>::max());
+      auto add = [&](double angle) {
+        const glm::vec2 dir(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
+        for (float r : {major - minor, major + minor}) {
+          a = glm::min(a, r * dir);
+          b = glm::max(b, r * dir);
+        }
+      };
+      const double s = std::min<double>(sweep, 2.0 * std::numbers::pi);
+      add(0.0);
+      add(s);
+      for (int k = 1; k < 4; ++k)
+        if (k * 0.5 * std::numbers::pi < s) add(k * 0.5 * std::numbers::pi);
+      lo = {a.x, a.y, -minor};
+      hi = {b.x, b.y, minor};
+      return true;
+    }
+    case pkg::PrimitiveType::Box:
+      if (!positive(p[0]) || !positive(p[1]) || !positive(p[2])) return false;
+      lo = {-p[0], -p[1], -p[2]};
+      hi = {p[0], p[1], p[2]};
+      return true;
+    default:
+      return false;
+  }
+}
+
+gpu::GpuInstance gpuInstance(const pkg::InstanceRecord& in, const glm::dvec3& anchor) {
+  gpu::GpuInstance g{};
+  g.origin_m = glm::vec3(glm::dvec3(in.origin[0], in.origin[1], in.origin[2]) - anchor);
+  g.object = in.object;
+  g.axis_x = glm::vec4(in.linear[0], in.linear[1], in.linear[2], in.params[0]);
+  g.axis_y = glm::vec4(in.linear[3], in.linear[4], in.linear[5], in.params[1]);
+  g.axis_z = glm::vec4(in.linear[6], in.linear[7], in.linear[8], in.params[2]);
+  g.type = in.type;
+  g.flags = in.flags & pkg::kInstanceCapped;
+  glm::vec3 lo(0.0f), hi(0.0f);
+  if (!localBox(in, lo, hi)) lo = hi = glm::vec3(0.0f);  // degenerate: draws nothing
+  g.local_min = lo;
+  g.local_max = hi;
+  return g;
+}
+
+}  // namespace
+
+struct ParametricRenderer::Impl {
+  const PackageView* view = nullptr;
+  GlRenderer* renderer = nullptr;
+  std::unique_ptr<ParametricMeshes> meshes;
+  std::array<GLuint, kImpostorTypes> programs{};         // eye outside the proxy (box: all)
+  std::array<GLuint, kImpostorTypes> inside_programs{};  // eye inside (ray-cast types only)
+  GLuint instance_buffer = 0, draw_buffer = 0, indirect_buffer = 0, vertex_array = 0;
+  uint64_t instance_bytes = 0;
+  // Per-frame scratch, kept to avoid allocation in steady frames.
+  std::array<std::vector<uint32_t>, kImpostorTypes> by_type;
+  std::vector<uint32_t> mesh_clusters;
+  std::vector<gpu::GpuParametricDraw> draws;
+  std::vector<DrawArraysIndirectCommand> commands;
+
+  ~Impl() {
+    for (GLuint program : programs) glDeleteProgram(program);
+    for (GLuint program : inside_programs) glDeleteProgram(program);
+    glDeleteBuffers(1, &instance_buffer);
+    glDeleteBuffers(1, &draw_buffer);
+    glDeleteBuffers(1, &indirect_buffer);
+    glDeleteVertexArrays(1, &vertex_array);
+  }
+};
+
+ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& renderer,
+                                       const ParametricMeshOptions& mesh_options)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.view = &view;
+  s.renderer = &renderer;
+  while (glGetError() != GL_NO_ERROR) {
+  }
+  for (uint32_t type = 0; type < kImpostorTypes; ++type) {
+    const std::string name = "ParametricRenderer: type " + std::to_string(type);
+    if (type == static_cast<uint32_t>(pkg::PrimitiveType::Box)) {
+      s.programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                                         {GL_FRAGMENT_SHADER, gl::boxFragmentShader()}},
+                                        name);
+      continue;
+    }
+    s.programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                                       {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, true)}},
+                                      name);
+    s.inside_programs[type] =
+        buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                        {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, false)}},
+                       name + " (eye inside)");
+  }
+  s.meshes = std::make_unique<ParametricMeshes>(view, mesh_options);
+
+  // The resident table: every instance of a parametric cluster, relative to its cluster's anchor.
+  const auto instances = view.instances();
+  std::vector<gpu::GpuInstance> table(std::max<size_t>(instances.size(), 1));
+  for (const pkg::ClusterRecord& c : view.clusters()) {
+    if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
+    if (c.instance_first > instances.size() || c.instance_count > instances.size() - c.instance_first)
+      continue;  // the view rejects such packages; never read past the table
+    const glm::dvec3 anchor = clusterAnchor(c);
+    for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
+      table[i] = gpuInstance(instances[i], anchor);
+  }
+  s.instance_bytes = table.size() * sizeof(gpu::GpuInstance);
+  glCreateBuffers(1, &s.instance_buffer);
+  glNamedBufferStorage(s.instance_buffer, GLsizeiptr(s.instance_bytes), table.data(), 0);
+  glCreateBuffers(1, &s.draw_buffer);
+  glCreateBuffers(1, &s.indirect_buffer);
+  glCreateVertexArrays(1, &s.vertex_array);  // the proxies come from gl_VertexID: no attributes
+  if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+    char message[112];
+    std::snprintf(message, sizeof message,
+                  "ParametricRenderer: set-up failed (GL error 0x%04x, %llu instance bytes)", error,
+                  static_cast<unsigned long long>(s.instance_bytes));
+    throw std::runtime_error(message);
+  }
+}
+
+ParametricRenderer::~ParametricRenderer() = default;
+
+uint64_t ParametricRenderer::instanceBytes() const { return impl_->instance_bytes; }
+ParametricMeshes& ParametricRenderer::meshes() { return *impl_->meshes; }
+
+ParametricDrawStats ParametricRenderer::draw(std::span<const uint32_t> clusters,
+                                             const ParametricView& view, ParametricMode mode,
+                                             uint64_t frame) {
+  return drawInto(impl_->renderer->framebuffer(), clusters, view, mode, frame);
+}
+
+ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
+                                                 std::span<const uint32_t> clusters,
+                                                 const ParametricView& view, ParametricMode mode,
+                                                 uint64_t frame) {
+  Impl& s = *impl_;
+  ParametricDrawStats stats;
+  mode = resolveParametricMode(mode);
+  if (mode == ParametricMode::Off || clusters.empty()) return stats;
+  const auto start = Clock::now();
+  const auto records = s.view->clusters();
+  for (auto& list : s.by_type) list.clear();
+  s.mesh_clusters.clear();
+  for (uint32_t c : clusters) {
+    if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric) ||
+        records[c].instance_count == 0 || records[c].instance_first >= s.view->instances().size())
+      continue;  // the view validated the ranges; never read past the table all the same
+    const uint32_t type = s.view->instances()[records[c].instance_first].type;
+    if (mode == ParametricMode::Impostor && type < kImpostorTypes)
+      s.by_type[type].push_back(c);
+    else
+      s.mesh_clusters.push_back(c);
+  }
+
+  GlRenderer& r = *s.renderer;
+  const glm::mat4& view_projection = r.viewProjection();
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, r.width(), r.height());
+  glDisable(GL_SCISSOR_TEST);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  glDisable(GL_BLEND);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, r.objectColorBuffer());
+
+  // Impostors: commands and per-cluster records of every type in one upload each.
+  s.draws.clear();
+  s.commands.clear();
+  std::array<uint32_t, kImpostorTypes + 1> type_begin{};
+  for (uint32_t type = 0; type < kImpostorTypes; ++type) {
+    type_begin[type] = static_cast<uint32_t>(s.commands.size());
+    for (uint32_t c : s.by_type[type]) {
+      const pkg::ClusterRecord& record = records[c];
+      const bool box = type == static_cast<uint32_t>(pkg::PrimitiveType::Box);
+      s.commands.push_back({box ? kBoxVertices : kStripVertices, record.instance_count, 0u,
+                            record.instance_first});
+      gpu::GpuParametricDraw d{};
+      d.anchor_eye = glm::vec3(clusterAnchor(record) - view.eye);
+      d.cluster = c;
+      s.draws.push_back(d);
+      ++stats.clusters_drawn;
+      stats.instances_drawn += record.instance_count;
+    }
+  }
+  type_begin[kImpostorTypes] = static_cast<uint32_t>(s.commands.size());
+  if (!s.commands.empty()) {
+    glNamedBufferData(s.indirect_buffer, GLsizeiptr(s.commands.size() * sizeof(s.commands[0])),
+                      s.commands.data(), GL_STREAM_DRAW);
+    glNamedBufferData(s.draw_buffer, GLsizeiptr(s.draws.size() * sizeof(s.draws[0])),
+                      s.draws.data(), GL_STREAM_DRAW);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gpu::kInstanceBinding, s.instance_buffer);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gpu::kParametricDrawBinding, s.draw_buffer);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
+    glBindVertexArray(s.vertex_array);
+    const glm::vec4 forward_near(glm::vec3(view.forward), static_cast<float>(view.near_m));
+    const float metres_per_px = static_cast<float>(1.0 / std::max(view.pixel_scale, 1e-9));
+    for (uint32_t type = 0; type < kImpostorTypes; ++type) {
+      const uint32_t first = type_begin[type], count = type_begin[type + 1] - first;
+      if (count == 0) continue;
+      const bool box = type == static_cast<uint32_t>(pkg::PrimitiveType::Box);
+      // Boxes are drawn whole (seen from inside too); the ray-cast proxies cull back faces (the
+      // vertex shader reverses the winding when the eye is inside a proxy), and go in two calls
+      // over the same commands: eye outside (early depth rejection kept), eye inside.
+      if (box) {
+        glDisable(GL_CULL_FACE);
+      } else {
+        glEnable(GL_CULL_FACE);
+        glCullFace(GL_BACK);
+        glFrontFace(GL_CCW);
+      }
+      for (int pass = 0; pass < (box ? 1 : 2); ++pass) {
+        const GLuint program = pass == 0 ? s.programs[type] : s.inside_programs[type];
+        glUseProgram(program);
+        glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                                  &view_projection[0][0]);
+        glProgramUniform1ui(program, gl::kObjectColorCountLocation, r.objectColorCount());
+        glProgramUniform4fv(program, gl::kParamViewForwardNearLocation, 1, &forward_near[0]);
+        glProgramUniform1f(program, gl::kParamMetresPerPxLocation, metres_per_px);
+        glProgramUniform1f(program, gl::kParamMinFeaturePxLocation,
+                           static_cast<float>(std::max(view.min_feature_px, 0.0)));
+        glProgramUniform1ui(program, gl::kParamDrawBaseLocation, first);
+        glProgramUniform1f(program, gl::kParamThinRadiusPxLocation,
+                           static_cast<float>(std::max(view.thin_radius_px, 0.0)));
+        glProgramUniform1i(program, gl::kParamProxyPassLocation,
+                           box ? gl::kProxyPassAll
+                               : (pass == 0 ? gl::kProxyPassOutside : gl::kProxyPassInside));
+        glMultiDrawArraysIndirect(
+            box ? GL_TRIANGLES : GL_TRIANGLE_STRIP,
+            reinterpret_cast<const void*>(uintptr_t(first) * sizeof(DrawArraysIndirectCommand)),
+            GLsizei(count), 0);
+        ++stats.impostor_calls;
+      }
+    }
+    glDisable(GL_CULL_FACE);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+    glBindVertexArray(0);
+    glUseProgram(0);
+  }
+
+  if (!s.mesh_clusters.empty()) {
+    glDisable(GL_CULL_FACE);
+    const ParametricMeshStats mesh_stats =
+        s.meshes->draw(s.mesh_clusters, view.eye, view_projection, view.pixel_scale, view.near_m,
+                       r.objectColorCount(), frame);
+    stats.clusters_drawn += mesh_stats.clusters_drawn;
+    stats.instances_drawn += mesh_stats.instances_drawn;
+    stats.mesh_triangles += mesh_stats.triangles_drawn;
+    stats.meshes_built += mesh_stats.meshes_built;
+  }
+  stats.cpu_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  return stats;
+}
+
+}  // namespace tw

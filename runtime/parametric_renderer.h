@@ -1,0 +1,93 @@
+// Draws the parametric clusters of a cut: cylinders, cones/frustums, spheres and torus segments
+// as ray-cast impostors, boxes as rasterized boxes, extrusions and revolutions as run-time
+// meshes (docs/parametrics.md).
+//
+// The package's instance table is resident: it is uploaded once, at construction, into an SSBO of
+// gpu::GpuInstance (parametric_gpu.h, the layout C++ and GLSL share), each instance's origin made
+// relative to its cluster's anchor (bounding-sphere centre) in double. Per frame, each drawn
+// cluster gets one GpuParametricDraw (anchor - eye, in double, then rounded) and one indirect
+// command (a 14-vertex box strip, 36-vertex list for boxes, x its instances, base instance = its
+// first instance); the clusters
+// of one type are one glMultiDrawArraysIndirect (two for the ray-cast types: eye outside the proxy,
+// with early depth rejection, and eye inside), so a frame makes at most nine impostor calls.
+// Output goes into the GlRenderer's targets with its conventions: reversed-Z depth (exact per
+// pixel through gl_FragDepth), object index + 1 in the id target, the same object colours (its
+// colour SSBO) and lighting (gl_shaders.h shadingGlsl()). Draw after GlRenderer::beginFrame.
+// Needs a current GL 4.5 context for the object's whole life.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string_view>
+
+#include <glm/glm.hpp>
+
+#include "gl_renderer.h"
+#include "package_view.h"
+#include "parametric_meshes.h"
+
+namespace tw {
+
+// Auto, the default, is resolved once a GL context is current: tessellated on Mesa's software
+// rasterizers (llvmpipe, softpipe), whose fragment throughput is poor and where the meshes were
+// measured faster (docs/parametrics.md: 36.0 against 47.0 ms median on the 1M plant's decks
+// path), impostor on GPUs, the design's choice (not measured here: no GPU in CI).
+enum class ParametricMode { Impostor, Tessellated, Off, Auto };
+// "impostor", "tessellated", "off", "auto"; parseParametricMode throws std::invalid_argument
+// naming the value otherwise.
+const char* parametricModeName(ParametricMode mode);
+ParametricMode parseParametricMode(std::string_view name);
+// Auto -> Tessellated or Impostor by the current context's GL_RENDERER; other modes unchanged.
+ParametricMode resolveParametricMode(ParametricMode mode);
+
+// The camera as the parametric passes need it; positions in the package frame.
+struct ParametricView {
+  glm::dvec3 eye{0.0};
+  glm::dvec3 forward{1.0, 0.0, 0.0};  // unit view direction (Camera::forward)
+  double near_m = 0.05;
+  double pixel_scale = 1.0;  // Camera::pixelScale(viewport height)
+  double min_feature_px = 1.0;  // impostors whose bounding sphere projects below are culled
+  // Tubes and spheres thinner than this radius on screen are drawn this thick (a line of about
+  // one pixel rather than broken dots); 0 draws them at their true size.
+  double thin_radius_px = 0.5;
+};
+
+struct ParametricDrawStats {
+  uint32_t clusters_drawn = 0;
+  uint64_t instances_drawn = 0;      // submitted (before per-instance small-feature culling)
+  uint32_t impostor_calls = 0;       // multi-draws issued
+  uint64_t mesh_triangles = 0;       // tessellated clusters (extrusion, revolution, or all)
+  uint32_t meshes_built = 0;
+  double cpu_ms = 0.0;               // CPU time of the call (llvmpipe rasterizes later)
+};
+
+class ParametricRenderer {
+ public:
+  // Uploads the instance table. Throws std::runtime_error when GL set-up fails. `view` and
+  // `renderer` must outlive this object.
+  ParametricRenderer(const PackageView& view, GlRenderer& renderer,
+                     const ParametricMeshOptions& mesh_options = {});
+  ~ParametricRenderer();
+  ParametricRenderer(const ParametricRenderer&) = delete;
+  ParametricRenderer& operator=(const ParametricRenderer&) = delete;
+
+  // Draws `clusters` (parametric cluster indices; others are ignored) into the renderer's targets
+  // with the camera of its last beginFrame. Off draws nothing; Auto is resolved first. `frame`
+  // orders the mesh cache.
+  ParametricDrawStats draw(std::span<const uint32_t> clusters, const ParametricView& view,
+                           ParametricMode mode, uint64_t frame);
+  // Same, into `framebuffer` (same size as the renderer's targets, with colour 0, ids 1, depth).
+  ParametricDrawStats drawInto(unsigned framebuffer, std::span<const uint32_t> clusters,
+                               const ParametricView& view, ParametricMode mode, uint64_t frame);
+
+  // Bytes of the resident instance SSBO.
+  uint64_t instanceBytes() const;
+  ParametricMeshes& meshes();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tw

@@ -1,0 +1,478 @@
+// Parametric objects drawn by GPU shaders, on llvmpipe: each impostor type against the same
+// primitive finely tessellated and drawn as a mesh (coverage, ids, depth), caps, torus sweep ends,
+// ids per object, exact depth against a mesh wall, far-from-origin stability, mode off, the
+// generated plant (parametric pixels, exact --check-occlusion with hzb), and tessellated mode
+// against impostor mode.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <set>
+
+#include "camera_path.h"
+#include "egl_context.h"
+#include "frame_loop.h"
+#include "parametric_gpu.h"
+#include "preprocess_driver.h"
+#include "tessellate.h"
+#include "test_support.h"
+#include "tws_writer.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 256, kHeight = 192;
+constexpr float kFineToleranceM = 0.0001f;  // the reference meshes: 0.1 mm chordal error
+
+struct Part {
+  uint32_t id = 0;
+  Primitive primitive;
+  Transform transform;
+  uint32_t color = 0xff3080c0u;
+};
+
+// Writes `parts` (each as a parametric primitive, or finely tessellated into a mesh when
+// `tessellated`) plus optional mesh objects into a .tws, preprocesses it, returns the package.
+fs::path buildPackage(const std::string& name, const std::vector<Part>& parts, bool tessellated,
+                      const std::vector<SceneObject>& meshes = {}) {
+  const fs::path dir = test::processScratchDir("parametric_renderer");
+  const fs::path scene = dir / (name + ".tws");
+  {
+    TwsWriter writer(scene);
+    writer.onLayer(0, {"parts", 0xff909090u});
+    for (const Part& part : parts) {
+      SceneObject object;
+      object.info.id = part.id;
+      object.info.name = "part " + std::to_string(part.id);
+      object.info.color_rgba = part.color;
+      object.info.transform = part.transform;
+      if (tessellated) {
+        TriangleMesh mesh;
+        tessellatePrimitive(part.primitive, kFineToleranceM, mesh);
+        mesh.normals.clear();
+        object.geometry = std::move(mesh);
+      } else {
+        object.geometry = part.primitive;
+      }
+      writer.onObject(object);
+    }
+    for (const SceneObject& mesh : meshes) writer.onObject(mesh);
+    writer.finish();
+  }
+  const fs::path out = dir / (name + ".twk");
+  PreprocessOptions options;
+  options.inputs = {scene};
+  options.output = out;
+  runPreprocess(options);
+  return out;
+}
+
+Camera lookingAt(const glm::dvec3& eye, const glm::dvec3& target) {
+  Camera camera;
+  camera.position = eye;
+  camera.lookAt(target);
+  camera.near_m = 0.05;
+  camera.far_m = 1000.0;
+  return camera;
+}
+
+struct Frame {
+  std::vector<uint32_t> ids;
+  std::vector<float> depth;
+  std::vector<uint8_t> rgba;
+  FrameStats stats;
+};
+
+// Renders until the cut is complete and steady. `reference`: every level-0 cluster (the fine
+// meshes are compared at full resolution, not at a LOD whose error is a fraction of a pixel).
+Frame render(const fs::path& package, const Camera& camera, ParametricMode mode,
+             OcclusionMode occlusion = OcclusionMode::Off, Walkthrough** keep = nullptr,
+             bool reference = false) {
+  WalkthroughOptions options;
+  options.reference = reference;
+  options.width = kWidth;
+  options.height = kHeight;
+  options.occlusion = occlusion;
+  options.prefetch = false;
+  options.tau_px = 0.25;
+  options.parametrics = mode;
+  static std::unique_ptr<Walkthrough> kept;
+  kept.reset();
+  auto walk = std::make_unique<Walkthrough>(package, options);
+  Frame frame;
+  int complete = 0;
+  for (int i = 0; i < 100 && complete < 3; ++i) {
+    frame.stats = walk->renderFrame(camera, 0.0);
+    complete = frame.stats.ancestor_fallbacks == 0 && frame.stats.pages_requested == 0
+                   ? complete + 1
+                   : 0;
+  }
+  walk->renderer().readObjectIds(frame.ids);
+  walk->renderer().readDepth(frame.depth);
+  walk->renderer().readColor(frame.rgba);
+  if (keep) {
+    kept = std::move(walk);
+    *keep = kept.get();
+  }
+  return frame;
+}
+
+// Where a world point lands in the image (top-down rows), -1 when behind the eye.
+glm::ivec2 pixelOf(const Camera& camera, const glm::dvec3& world) {
+  const glm::dmat4 vp = camera.projection(double(kWidth) / kHeight) * camera.viewRotation();
+  const glm::dvec4 clip = vp * glm::dvec4(world - camera.position, 1.0);
+  if (clip.w <= 0.0) return {-1, -1};
+  const double x = (clip.x / clip.w * 0.5 + 0.5) * kWidth;
+  const double y = (1.0 - (clip.y / clip.w * 0.5 + 0.5)) * kHeight;
+  return {int(std::floor(x)), int(std::floor(y))};
+}
+
+uint32_t idAt(const Frame& frame, glm::ivec2 p) {
+  if (p.x < 0 || p.y < 0 || p.x >= kWidth || p.y >= kHeight) return ~0u;
+  return frame.ids[size_t(p.y) * kWidth + p.x];
+}
+float depthAt(const Frame& frame, glm::ivec2 p) { return frame.depth[size_t(p.y) * kWidth + p.x]; }
+
+struct Agreement {
+  size_t covered = 0;        // pixels either frame covers
+  size_t mismatched = 0;     // covered by one only, or by different objects
+  size_t both = 0;           // covered by both with the same object
+  size_t depth_close = 0;    // of `both`: relative depth difference within the tolerance
+  std::vector<double> relative_depth;  // of `both`
+  double mismatchShare() const { return covered ? double(mismatched) / covered : 1.0; }
+  double depthShare() const { return both ? double(depth_close) / both : 0.0; }
+  // Quantile q in [0, 1] of the relative depth differences.
+  double depthQuantile(double q) {
+    if (relative_depth.empty()) return 1.0;
+    const size_t k = std::min(relative_depth.size() - 1, size_t(q * relative_depth.size()));
+    std::nth_element(relative_depth.begin(), relative_depth.begin() + k, relative_depth.end());
+    return relative_depth[k];
+  }
+};
+
+// Reversed-Z depth is about near / distance, so a relative depth difference is a relative
+// distance difference.
+// Silhouettes: where the view ray grazes the surface, a chordal error of 0.5 mm moves the depth
+// by centimetres, so depth is judged by quantiles, not by its worst pixel.
+Agreement compare(const Frame& a, const Frame& b, double relative_depth_tolerance) {
+  Agreement g;
+  for (size_t i = 0; i < a.ids.size(); ++i) {
+    if (a.ids[i] == 0 && b.ids[i] == 0) continue;
+    ++g.covered;
+    if (a.ids[i] != b.ids[i]) {
+      ++g.mismatched;
+      continue;
+    }
+    ++g.both;
+    const double da = a.depth[i], db = b.depth[i];
+    g.depth_close += std::abs(da - db) <= relative_depth_tolerance * std::max(da, db);
+    g.relative_depth.push_back(std::abs(da - db) / std::max({da, db, 1e-30}));
+  }
+  return g;
+}
+
+Transform placed(const glm::dvec3& origin, const glm::vec3& axis_deg = glm::vec3(0.0f)) {
+  Transform t;
+  t.origin = origin;
+  const glm::vec3 a = glm::radians(axis_deg);
+  const glm::mat3 rx(1, 0, 0, 0, std::cos(a.x), std::sin(a.x), 0, -std::sin(a.x), std::cos(a.x));
+  const glm::mat3 ry(std::cos(a.y), 0, -std::sin(a.y), 0, 1, 0, std::sin(a.y), 0, std::cos(a.y));
+  const glm::mat3 rz(std::cos(a.z), std::sin(a.z), 0, -std::sin(a.z), std::cos(a.z), 0, 0, 0, 1);
+  t.linear = rz * ry * rx;
+  return t;
+}
+
+class ParametricRendering : public ::testing::Test {
+ protected:
+  EglContext context_;
+};
+
+TEST(ParametricGpu, ModesRoundTripAndLayoutIsStd430) {
+  for (ParametricMode m : {ParametricMode::Impostor, ParametricMode::Tessellated,
+                           ParametricMode::Off, ParametricMode::Auto})
+    EXPECT_EQ(parseParametricMode(parametricModeName(m)), m);
+  EXPECT_EQ(parseParametricMode("auto"), ParametricMode::Auto);
+  EXPECT_THROW(parseParametricMode("rays"), std::invalid_argument);
+  EXPECT_EQ(sizeof(gpu::GpuInstance), 96u);
+  EXPECT_EQ(gpu::kGpuTorusSegment, static_cast<uint32_t>(pkg::PrimitiveType::TorusSegment));
+  EXPECT_EQ(gpu::kGpuBox, static_cast<uint32_t>(pkg::PrimitiveType::Box));
+  EXPECT_EQ(gpu::kGpuCapped, pkg::kInstanceCapped);
+}
+
+struct TypeCase {
+  const char* name;
+  Primitive primitive;
+  Transform transform;
+};
+
+std::vector<TypeCase> typeCases() {
+  return {
+      {"cylinder", Cylinder{0.5f, 2.0f, true}, placed({0, 0, 0}, {20, 10, 0})},
+      {"cone", Cone{0.7f, 0.25f, 1.5f, true}, placed({0, 0, 0}, {-15, 25, 0})},
+      {"cone_apex", Cone{0.6f, 0.0f, 1.2f, false}, placed({0, 0, 0}, {0, 0, 0})},
+      {"sphere", Sphere{0.8f}, placed({0, 0, 0.5})},
+      {"torus", TorusSegment{1.0f, 0.25f, 2.3f}, placed({0, 0, 0.5}, {30, 0, 0})},
+      {"box", Box{glm::vec3(0.9f, 0.5f, 0.3f)}, placed({0, 0, 0.5}, {10, 20, 30})},
+  };
+}
+
+// The image of each impostor type matches the same primitive tessellated at 0.1 mm: coverage
+// and ids agree but for a thin silhouette band, depth agrees where both cover.
+TEST_F(ParametricRendering, EachTypeMatchesAFineTessellation) {
+  const Camera camera = lookingAt({3.2, -2.4, 2.2}, {0.0, 0.0, 0.7});
+  for (const TypeCase& c : typeCases()) {
+    SCOPED_TRACE(c.name);
+    const std::vector<Part> parts = {{1, c.primitive, c.transform}};
+    const Frame impostor = render(buildPackage(std::string("imp_") + c.name, parts, false), camera,
+                                  ParametricMode::Impostor);
+    const Frame mesh = render(buildPackage(std::string("mesh_") + c.name, parts, true), camera,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_EQ(impostor.stats.parametric_clusters_drawn, 1u);
+    EXPECT_EQ(impostor.stats.parametric_instances_drawn, 1u);
+    EXPECT_EQ(impostor.stats.parametric_skipped, 0u);
+    EXPECT_EQ(mesh.stats.parametric_clusters_drawn, 0u);
+    Agreement g = compare(impostor, mesh, 2e-3);
+    EXPECT_GT(g.covered, 1000u);
+    EXPECT_LT(g.mismatchShare(), 0.02) << g.mismatched << " of " << g.covered;
+    // Depth: relative distance differences; 1e-4 is 0.45 mm at the 4.5 m of the view (the
+    // reference's facets lie up to 0.1 mm inside the surface, more along grazing rays).
+    EXPECT_LT(g.depthQuantile(0.5), 1e-4);
+    EXPECT_LT(g.depthQuantile(0.95), 5e-4) << g.depth_close << " of " << g.both;
+    // Colour: the same object colour and lighting formula (the mesh is faceted, the impostor
+    // smooth, so compare the mean over the covered pixels).
+    double sum_i = 0.0, sum_m = 0.0;
+    for (size_t i = 0; i < impostor.ids.size(); ++i)
+      if (impostor.ids[i] != 0 && mesh.ids[i] != 0)
+        for (int k = 0; k < 3; ++k) {
+          sum_i += impostor.rgba[4 * i + k];
+          sum_m += mesh.rgba[4 * i + k];
+        }
+    EXPECT_NEAR(sum_i / std::max(sum_m, 1.0), 1.0, 0.05);
+  }
+}
+
+// Looking down the axis: a capped cylinder shows its top disc at the centre; an open one shows
+// its inside wall around and nothing through the middle.
+TEST_F(ParametricRendering, CapsOnlyWhenCapped) {
+  const Camera camera = lookingAt({0.001, 0.0, 5.0}, {0.0, 0.0, 0.0});
+  for (bool capped : {true, false}) {
+    SCOPED_TRACE(capped ? "capped" : "open");
+    const fs::path cyl = buildPackage(capped ? "cap_cyl" : "open_cyl",
+                                      {{1, Cylinder{0.5f, 1.0f, capped}, placed({0, 0, 0})}}, false);
+    const Frame f = render(cyl, camera, ParametricMode::Impostor);
+    const glm::ivec2 centre = pixelOf(camera, {0, 0, 1});
+    EXPECT_EQ(idAt(f, centre), capped ? 1u : 0u);
+    // Inside the rim, a quarter radius in: the cap, or the inner wall further down.
+    const glm::ivec2 inner = pixelOf(camera, {0.45, 0.0, 1.0});
+    EXPECT_EQ(idAt(f, inner), 1u);
+    if (capped) {
+      // Cap depth: the plane z = 1 at distance 4 from the eye; reversed Z ~ near / distance.
+      EXPECT_NEAR(depthAt(f, centre), 0.05 / 4.0, 0.05 / 4.0 * 0.01);
+    } else {
+      EXPECT_LT(depthAt(f, inner), 0.05 / 4.0 * 0.99);  // deeper than the top plane
+    }
+    const fs::path cone = buildPackage(capped ? "cap_cone" : "open_cone",
+                                       {{1, Cone{0.3f, 0.6f, 1.0f, capped}, placed({0, 0, 0})}},
+                                       false);
+    const Frame g = render(cone, camera, ParametricMode::Impostor);
+    EXPECT_EQ(idAt(g, centre), capped ? 1u : 0u);
+  }
+}
+
+// A quarter elbow seen from above: present inside its sweep, absent beyond both ends.
+TEST_F(ParametricRendering, TorusSweepEnds) {
+  const Camera camera = lookingAt({0.001, 0.0, 6.0}, {0.0, 0.0, 0.0});
+  const fs::path pkg = buildPackage(
+      "elbow", {{1, TorusSegment{1.0f, 0.2f, float(std::numbers::pi / 2)}, placed({0, 0, 0})}},
+      false);
+  const Frame f = render(pkg, camera, ParametricMode::Impostor);
+  auto onRing = [&](double deg) {
+    const double a = glm::radians(deg);
+    return idAt(f, pixelOf(camera, {std::cos(a), std::sin(a), 0.2}));
+  };
+  EXPECT_EQ(onRing(5), 1u);
+  EXPECT_EQ(onRing(45), 1u);
+  EXPECT_EQ(onRing(85), 1u);
+  EXPECT_EQ(onRing(-10), 0u);
+  EXPECT_EQ(onRing(100), 0u);
+  EXPECT_EQ(onRing(180), 0u);
+  EXPECT_EQ(onRing(270), 0u);
+}
+
+// Five objects of five types side by side: the id under each one's centre is that object.
+TEST_F(ParametricRendering, IdBufferHoldsEachObject) {
+  std::vector<Part> parts = {
+      {11, Cylinder{0.3f, 0.6f, true}, placed({-2.0, 0, 0})},
+      {12, Cone{0.4f, 0.1f, 0.6f, true}, placed({-1.0, 0, 0})},
+      {13, Sphere{0.35f}, placed({0.0, 0, 0.3})},
+      {14, TorusSegment{0.3f, 0.1f, 6.2831853f}, placed({1.0, 0, 0.3}, {90, 0, 0})},
+      {15, Box{glm::vec3(0.3f)}, placed({2.0, 0, 0.3})},
+  };
+  const fs::path pkg = buildPackage("five", parts, false);
+  const Camera camera = lookingAt({0.0, -6.0, 0.3}, {0.0, 0.0, 0.3});
+  Walkthrough* walk = nullptr;
+  const Frame f = render(pkg, camera, ParametricMode::Impostor, OcclusionMode::Off, &walk);
+  const glm::dvec3 centres[5] = {{-2.0, 0, 0.3}, {-1.0, 0, 0.15}, {0, 0, 0.3}, {1.3, 0, 0.3}, {2.0, 0, 0.3}};
+  for (int k = 0; k < 5; ++k) {
+    const uint32_t id = idAt(f, pixelOf(camera, centres[k]));
+    ASSERT_GT(id, 0u) << "object " << parts[k].id;
+    ASSERT_LE(id, walk->package().objects().size());
+    EXPECT_EQ(walk->package().objects()[id - 1].id, parts[k].id);
+  }
+  EXPECT_EQ(f.stats.parametric_instances_drawn, 5u);
+  EXPECT_EQ(f.stats.parametric_clusters_drawn, 5u);  // one cluster per type
+}
+
+// A cylinder impostor through a mesh wall: exact depth (gl_FragDepth) clips it where the wall
+// is, as the fully tessellated scene does.
+TEST_F(ParametricRendering, ImpostorCrossingAMeshWallIsClippedByDepth) {
+  SceneObject wall;
+  wall.info.id = 1;
+  wall.info.name = "wall";
+  wall.info.color_rgba = 0xff808080u;
+  wall.info.transform.origin = glm::dvec3(0.0, 0.0, 1.0);
+  wall.geometry = test::subdividedBox(glm::vec3(0.05f, 2.0f, 1.0f), 4);
+  const std::vector<Part> pipe = {{2, Cylinder{0.3f, 3.0f, true}, placed({-1.5, 0, 1.0}, {0, 90, 0})}};
+  const Camera camera = lookingAt({-2.5, -3.0, 2.2}, {0.0, 0.0, 1.0});
+  const Frame impostor =
+      render(buildPackage("wall_imp", pipe, false, {wall}), camera, ParametricMode::Impostor);
+  const Frame mesh = render(buildPackage("wall_mesh", pipe, true, {wall}), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  const Agreement g = compare(impostor, mesh, 2e-3);
+  EXPECT_LT(g.mismatchShare(), 0.02) << g.mismatched << " of " << g.covered;
+  EXPECT_GT(g.depthShare(), 0.99);
+  size_t pipe_px = 0, wall_px = 0;
+  for (uint32_t id : impostor.ids) {
+    pipe_px += id != 0 && id != impostor.ids[0] && id == idAt(impostor, pixelOf(camera, {-1.0, 0, 1.0}));
+    wall_px += id != 0;
+  }
+  EXPECT_GT(pipe_px, 500u);
+  EXPECT_GT(wall_px, pipe_px);
+  // The pipe's far half is behind the wall: its axis point at x = +1 shows the wall.
+  EXPECT_NE(idAt(impostor, pixelOf(camera, {1.0, 0, 1.0})),
+            idAt(impostor, pixelOf(camera, {-1.0, 0, 1.0})));
+}
+
+// The same scene 500 km east and 7000 km north renders the same image: eye-relative in double.
+TEST_F(ParametricRendering, FarFromOriginRendersTheSame) {
+  const glm::dvec3 far(500000.0, 7000000.0, 0.0);
+  std::vector<Part> near_parts = {
+      {1, Cylinder{0.05f, 1.5f, true}, placed({0, 0, 0}, {0, 90, 0})},
+      {2, TorusSegment{0.3f, 0.05f, float(std::numbers::pi / 2)}, placed({1.5, 0.3, 0.0}, {0, 0, -90})},
+      {3, Sphere{0.2f}, placed({0.0, 0.8, 0.2})},
+      {4, Box{glm::vec3(1.0f, 1.0f, 0.02f)}, placed({0.5, 0.5, -0.3})},
+  };
+  std::vector<Part> far_parts = near_parts;
+  for (Part& p : far_parts) p.transform.origin += far;
+  const Camera near_camera = lookingAt({-0.8, -1.2, 0.9}, {0.7, 0.3, 0.0});
+  Camera far_camera = near_camera;
+  far_camera.position += far;
+  const Frame a = render(buildPackage("origin", near_parts, false), near_camera, ParametricMode::Impostor);
+  const Frame b = render(buildPackage("far", far_parts, false), far_camera, ParametricMode::Impostor);
+  const Agreement g = compare(a, b, 1e-4);
+  EXPECT_GT(g.covered, 5000u);
+  EXPECT_LE(g.mismatched, g.covered / 1000) << g.mismatched << " of " << g.covered;
+  EXPECT_GT(g.depthShare(), 0.999);
+}
+
+// The default resolves by the renderer: these tests run on llvmpipe, where tessellated measured
+// faster; explicit modes stay as asked.
+TEST_F(ParametricRendering, AutoPicksTessellatedOnLlvmpipe) {
+  EXPECT_EQ(resolveParametricMode(ParametricMode::Auto), ParametricMode::Tessellated);
+  EXPECT_EQ(resolveParametricMode(ParametricMode::Impostor), ParametricMode::Impostor);
+  const fs::path pkg = buildPackage("auto", {{1, Sphere{0.8f}, placed({0, 0, 0})}}, false);
+  WalkthroughOptions options;
+  options.width = kWidth;
+  options.height = kHeight;
+  EXPECT_EQ(options.parametrics, ParametricMode::Auto);
+  Walkthrough walk(pkg, options);
+  EXPECT_EQ(walk.parametrics(), ParametricMode::Tessellated);
+  const FrameStats stats = walk.renderFrame(lookingAt({0.0, -4.0, 0.0}, {0, 0, 0}), 0.0);
+  EXPECT_GT(stats.parametric_triangles, 0u);
+}
+
+TEST_F(ParametricRendering, OffDrawsNoneAndCountsThemSkipped) {
+  const fs::path pkg = buildPackage("off", {{1, Sphere{0.8f}, placed({0, 0, 0})},
+                                            {2, Box{glm::vec3(0.5f)}, placed({2, 0, 0})}}, false);
+  const Camera camera = lookingAt({1.0, -5.0, 1.0}, {1.0, 0.0, 0.0});
+  const Frame off = render(pkg, camera, ParametricMode::Off);
+  EXPECT_EQ(off.stats.parametric_skipped, 2u);
+  EXPECT_EQ(off.stats.parametric_clusters_drawn, 0u);
+  for (uint32_t id : off.ids) ASSERT_EQ(id, 0u);
+  const Frame on = render(pkg, camera, ParametricMode::Impostor);
+  EXPECT_EQ(on.stats.parametric_skipped, 0u);
+  EXPECT_EQ(on.stats.parametric_clusters_drawn, 2u);
+}
+
+// Tessellated mode (meshes by distance) covers what impostor mode covers, within a silhouette
+// band, for every type.
+TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
+  std::vector<Part> parts;
+  uint32_t id = 1;
+  for (const TypeCase& c : typeCases()) {
+    Part p{id, c.primitive, c.transform};
+    p.transform.origin += glm::dvec3(2.6 * (id - 1), 0.0, 0.0);
+    parts.push_back(p);
+    ++id;
+  }
+  const fs::path pkg = buildPackage("all_types", parts, false);
+  const Camera camera = lookingAt({6.5, -9.0, 3.0}, {6.5, 0.0, 0.5});
+  const Frame impostor = render(pkg, camera, ParametricMode::Impostor);
+  const Frame tessellated = render(pkg, camera, ParametricMode::Tessellated);
+  EXPECT_GT(tessellated.stats.parametric_triangles, 100u);
+  EXPECT_EQ(tessellated.stats.parametric_instances_drawn, parts.size());
+  Agreement g = compare(impostor, tessellated, 5e-3);
+  EXPECT_GT(g.covered, 2000u);
+  EXPECT_LT(g.mismatchShare(), 0.03) << g.mismatched << " of " << g.covered;
+  // Half a pixel of chordal error at about 9 m is up to 2.7 cm: depth agrees to about 1 cm.
+  EXPECT_LT(g.depthQuantile(0.5), 3e-3);
+  EXPECT_GT(g.depthShare(), 0.8);
+}
+
+// The generated plant: most of it is parametric. Impostors show it; hzb with parametrics in pass
+// 1 loses no pixel against the same cut drawn unculled.
+TEST_F(ParametricRendering, GeneratedPlantShowsParametricPixels) {
+  const fs::path dir = test::processScratchDir("parametric_renderer");
+  const fs::path scene = dir / "plant.tws";
+  const test::CommandResult gen =
+      test::runTerawalk("gen plant --triangles 200K -o " + scene.string());
+  ASSERT_EQ(gen.exit_code, 0) << gen.output;
+  const fs::path pkg = dir / "plant.twk";
+  PreprocessOptions options;
+  options.inputs = {scene};
+  options.output = pkg;
+  runPreprocess(options);
+
+  const CameraPath path = readCameraPath(test::dataDir() / "paths" / "plant-decks.path");
+  Camera base;
+  base.near_m = 0.05;
+  base.far_m = 5000.0;
+  const Camera camera = path.sample(path.keys.front().time_s, base);
+  Walkthrough* walk = nullptr;
+  const Frame f = render(pkg, camera, ParametricMode::Impostor, OcclusionMode::Hzb, &walk);
+  std::set<uint32_t> parametric_objects;
+  for (const pkg::InstanceRecord& in : walk->package().instances()) parametric_objects.insert(in.object);
+  size_t parametric_px = 0;
+  for (uint32_t id : f.ids) parametric_px += id != 0 && parametric_objects.count(id - 1);
+  EXPECT_GT(double(parametric_px) / f.ids.size(), 0.3);
+  EXPECT_GT(f.stats.parametric_clusters_drawn, 0u);
+
+  // --check-occlusion stays exact: the unculled redraw draws the parametrics too.
+  std::vector<uint32_t> culled = f.ids, unculled;
+  walk->redrawUnculled();
+  walk->renderer().readObjectIds(unculled);
+  size_t lost = 0;
+  for (size_t i = 0; i < culled.size(); ++i) lost += culled[i] != unculled[i];
+  EXPECT_EQ(lost, 0u);
+
+  const Frame off = render(pkg, camera, ParametricMode::Off);
+  size_t off_px = 0;
+  for (uint32_t id : off.ids) off_px += id != 0 && parametric_objects.count(id - 1);
+  EXPECT_EQ(off_px, 0u);
+  EXPECT_GT(off.stats.parametric_skipped, 0u);
+}
+
+}  // namespace
+}  // namespace tw
