@@ -24,6 +24,7 @@
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "image_compare.h"
+#include "tessellate.h"
 
 namespace tw {
 namespace {
@@ -102,6 +103,13 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.occlusion = parseOcclusionMode(args.occlusion);
   options.parametrics = parseParametricMode(args.parametrics);
   options.parametric_meshes.fixed_tolerance_m = args.parametric_tolerance_m;
+  if (args.reference) {
+    // Brute force means the full-resolution model: parametrics as the triangles the preprocessor
+    // would have made (its chordal tolerance), unless asked otherwise.
+    if (args.parametrics == "auto") options.parametrics = ParametricMode::Tessellated;
+    if (args.parametric_tolerance_m == 0.0)
+      options.parametric_meshes.fixed_tolerance_m = kDefaultChordalTolerance;
+  }
   options.hzb.read_width_px = args.hzb_read_width;
   options.hzb.rebuild_from_final_depth = args.hzb_final_rebuild;
   options.hzb.build = parseHzbBuild(args.hzb_build);
@@ -298,7 +306,9 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
                   "Frames a page must go unused before it may be evicted")
       ->capture_default_str();
   cmd->add_flag("--reference", args->reference,
-                "Brute force: every full-resolution triangle, no LOD, no culling");
+                "Brute force: every full-resolution triangle, no LOD, no culling (parametrics "
+                "tessellated at the preprocessor's 2 mm unless --parametrics or "
+                "--parametric-tolerance say otherwise)");
   cmd->add_flag("--no-prefetch", args->no_prefetch, "Do not prefetch along the camera's velocity");
   cmd->add_flag("--no-frustum", args->no_frustum,
                 "No frustum culling: LOD alone (benchmarks measure each technique's share)");
