@@ -172,6 +172,8 @@ VisibilitySummary addVisibility(const std::filesystem::path& path,
 
 PreprocessReport runPreprocess(const PreprocessOptions& options) {
   if (options.inputs.empty()) throw std::invalid_argument("no input files");
+  if (options.parametric_cluster_size < 1 || options.parametric_cluster_size > 65536)
+    throw std::invalid_argument("preprocess: parametric cluster size must be 1..65536");
   if (options.cluster_size < 64 || options.cluster_size > 4096)
     throw std::invalid_argument("cluster size must be between 64 and 4096 triangles");
   auto run_start = Clock::now();
@@ -197,6 +199,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   for (const auto& input : options.inputs) hash.addFile(std::filesystem::absolute(input));
   hash.addBrickingOptions(bricking);
   hash.addValue(options.cluster_size);
+  hash.addValue(options.parametric_cluster_size);
   if (!options.resume) removeWorkDir(bricking.work_dir);
   BrickCache cache(bricking.work_dir, hash.digest());
 
@@ -405,6 +408,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   ParametricSortOptions sort_options;
   sort_options.work_dir = bricking.work_dir / "parametric-runs";
   sort_options.memory_budget_bytes = std::max<uint64_t>(options.memory_budget_bytes / 8, 1u << 20);
+  sort_options.max_per_cluster = options.parametric_cluster_size;
   const ParametricStream parametrics =
       [&](const std::function<void(std::span<const ParametricItem>)>& sink) {
         std::vector<ParametricItem> items;

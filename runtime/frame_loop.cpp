@@ -122,19 +122,29 @@ void Walkthrough::appendItems(std::span<const uint32_t> clusters, const glm::dve
   for (uint32_t c : clusters) items.push_back(makeDrawItem(pager_->gpuCluster(c), eye));
 }
 
-void Walkthrough::drawParametrics(FrameStats* stats) {
+void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats* stats) {
   if (options_.parametrics == ParametricMode::Off) {
-    if (stats) stats->parametric_skipped = uint32_t(last_parametric_.size());
+    if (stats) stats->parametric_skipped += uint32_t(clusters.size());
     return;
   }
+  if (clusters.empty()) return;
   const ParametricDrawStats drawn =
-      parametric_->draw(last_parametric_, last_parametric_view_, options_.parametrics, frame_);
+      parametric_->draw(clusters, last_parametric_view_, options_.parametrics, frame_);
   if (stats) {
-    stats->parametric_clusters_drawn = drawn.clusters_drawn;
-    stats->parametric_instances_drawn = drawn.instances_drawn;
-    stats->parametric_triangles = drawn.mesh_triangles;
-    stats->parametric_cpu_ms = drawn.cpu_ms;
+    stats->parametric_clusters_drawn += drawn.clusters_drawn;
+    stats->parametric_instances_drawn += drawn.instances_drawn;
+    stats->parametric_triangles += drawn.mesh_triangles;
+    stats->parametric_cpu_ms += drawn.cpu_ms;
   }
+}
+
+void Walkthrough::splitByKind(std::span<const uint32_t> clusters, std::vector<uint32_t>& mesh,
+                              std::vector<uint32_t>& parametric) const {
+  mesh.clear();
+  parametric.clear();
+  for (uint32_t c : clusters)
+    (view_->clusters()[c].kind == uint8_t(pkg::ClusterKind::Parametric) ? parametric : mesh)
+        .push_back(c);
 }
 
 uint64_t Walkthrough::redrawUnculled() {
@@ -143,7 +153,7 @@ uint64_t Walkthrough::redrawUnculled() {
   renderer_->beginFrame(last_rotation_, last_projection_);
   const size_t first = std::min(full_order_pass1_, items_.size());
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).first(first));
-  drawParametrics(nullptr);
+  drawParametrics(last_parametric_, nullptr);
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(first));
   const RenderStats render_stats = renderer_->endFrame();
   glFinish();
@@ -240,20 +250,31 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     frame.eye = eye;
     frame.view_projection = last_projection_ * last_rotation_;  // as the renderer multiplies
     stats.view_cell = -1;
-    culler_->splitByLastVisible(eye, *draw_list, pass1_, rest_, stats);
-    appendItems(pass1_, eye, items_);
+    // Parametric clusters take both passes like mesh clusters (their boxes are tested the same
+    // way): inside a plant most pipes are behind decks and walls, which are parametric too.
+    hzb_cut_.assign(draw_list->begin(), draw_list->end());
+    if (options_.parametrics != ParametricMode::Off)
+      hzb_cut_.insert(hzb_cut_.end(), parametric_list.begin(), parametric_list.end());
+    else
+      stats.parametric_skipped = uint32_t(parametric_list.size());
+    culler_->splitByLastVisible(eye, hzb_cut_, pass1_, rest_, stats);
+    splitByKind(pass1_, mesh_pass_, parametric_pass_);
+    appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, items_);
-    drawParametrics(&stats);  // with pass 1: their depth goes into the HZB
+    drawParametrics(parametric_pass_, &stats);
+    full_order_.assign(mesh_pass_.begin(), mesh_pass_.end());
+    full_order_pass1_ = mesh_pass_.size();
     culler_->cullRest(frame, rest_, pass2_, stats);
+    splitByKind(pass2_, mesh_pass_, parametric_pass_);
     const size_t pass1_items = items_.size();
-    appendItems(pass2_, eye, items_);
+    appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(pass1_items));
+    drawParametrics(parametric_pass_, &stats);
     culler_->recordVisible(frame, pass1_, pass2_, stats);
     stats.pass1_clusters = uint32_t(pass1_.size());
     stats.pass2_clusters = uint32_t(pass2_.size());
-    full_order_.assign(pass1_.begin(), pass1_.end());
-    full_order_pass1_ = pass1_.size();
-    full_order_.insert(full_order_.end(), rest_.begin(), rest_.end());
+    splitByKind(rest_, mesh_pass_, parametric_pass_);
+    full_order_.insert(full_order_.end(), mesh_pass_.begin(), mesh_pass_.end());
   } else {
     const std::vector<uint32_t>* list = draw_list;
     if (mode == OcclusionMode::Pvs) {
@@ -262,7 +283,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     }
     appendItems(*list, eye, items_);
     renderer_->draw(*pool_, items_);
-    drawParametrics(&stats);
+    drawParametrics(last_parametric_, &stats);
     full_order_.assign(draw_list->begin(), draw_list->end());
     full_order_pass1_ = full_order_.size();
   }

@@ -100,8 +100,11 @@ class Walkthrough {
   void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                    std::vector<DrawItem>& items) const;
   void adaptTau(double frame_ms);
-  // Draws last_parametric_ with the last frame's camera; adds to `stats` when given.
-  void drawParametrics(FrameStats* stats);
+  // Draws `clusters` (parametric) with the last frame's camera; adds to `stats` when given.
+  void drawParametrics(std::span<const uint32_t> clusters, FrameStats* stats);
+  // hzb: splits a pass's clusters into mesh ones (`mesh`) and parametric ones (`parametric`).
+  void splitByKind(std::span<const uint32_t> clusters, std::vector<uint32_t>& mesh,
+                   std::vector<uint32_t>& parametric) const;
 
   WalkthroughOptions options_;
   std::unique_ptr<PackageView> view_;
@@ -115,7 +118,9 @@ class Walkthrough {
   std::unique_ptr<OcclusionCuller> culler_;
   std::unique_ptr<ParametricRenderer> parametric_;
   std::vector<uint32_t> all_parametric_;   // reference mode: every parametric cluster
-  std::vector<uint32_t> last_parametric_;  // the last frame's parametric clusters
+  std::vector<uint32_t> last_parametric_;  // the last frame's parametric clusters (whole cut)
+  // hzb: the cut's mesh and parametric clusters together, and each pass split by kind.
+  std::vector<uint32_t> hzb_cut_, mesh_pass_, parametric_pass_;
   ParametricView last_parametric_view_;
   size_t full_order_pass1_ = 0;  // hzb: parametrics were drawn after this many of full_order_
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes

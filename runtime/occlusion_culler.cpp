@@ -79,6 +79,12 @@ const pkg::VisibilityCellRecord* OcclusionCuller::cellAt(const glm::dvec3& eye) 
   return visibility_.cellAt(eye);
 }
 
+uint64_t OcclusionCuller::restingWeight(const pkg::ClusterRecord& record) {
+  if (record.kind == uint8_t(pkg::ClusterKind::Parametric))
+    return uint64_t(record.instance_count) * kParametricRestingWeight;
+  return record.triangle_count;
+}
+
 void OcclusionCuller::resetVisible() {
   for (uint32_t c : last_visible_list_) last_visible_[c] = 0;
   last_visible_list_.clear();
@@ -92,7 +98,7 @@ void OcclusionCuller::splitByLastVisible(const glm::dvec3& eye, std::span<const 
   pass1.clear();
   rest.clear();
   cut_triangles_ = hidden_triangles_ = 0;
-  for (uint32_t c : cut) cut_triangles_ += view_->clusters()[c].triangle_count;
+  for (uint32_t c : cut) cut_triangles_ += restingWeight(view_->clusters()[c]);
   if (resting_left_ > 0) {
     pass1.assign(cut.begin(), cut.end());
     if (const pkg::VisibilityCellRecord* here = pvs_ ? cellAt(eye) : nullptr)
@@ -280,7 +286,7 @@ void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint
       ++stats.culled_frustum;
     } else {
       ++stats.occlusion_culled;
-      hidden_triangles_ += view_->clusters()[c].triangle_count;
+      hidden_triangles_ += restingWeight(view_->clusters()[c]);
     }
   }
   stats.hzb_test_ms += msSince(test_start);

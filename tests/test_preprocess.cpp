@@ -197,7 +197,8 @@ TEST(Preprocess, StreamedPackageEqualsTheInMemoryAssembly) {
   forEachParametricBatch(*scene, 4096, [&](std::span<const ParametricRecord> batch) {
     for (const ParametricRecord& r : batch) items.push_back({r.object, r.primitive, r.transform});
   });
-  addParametricClusters(items, clusterPrimitives(items, storage.origin), storage);
+  addParametricClusters(
+      items, clusterPrimitives(items, storage.origin, options.parametric_cluster_size), storage);
   const fs::path in_memory = dir / "in_memory.twk";
   writePackage(storage, in_memory);
   EXPECT_GT(storage.pages.size(), 1u);

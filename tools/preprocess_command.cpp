@@ -17,6 +17,7 @@ struct PreprocessArgs {
   std::string memory_budget = "2G";
   uint32_t threads = 0;
   uint32_t cluster_size = 256;
+  uint32_t parametric_cluster_size = 64;
   uint64_t brick_triangles = 0;
   bool resume = false;
   bool keep_work = false;
@@ -75,6 +76,8 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)");
   cmd->add_option("--cluster-size", args->cluster_size,
                   "Triangles per cluster, 64-4096 (default 256)");
+  cmd->add_option("--parametric-cluster-size", args->parametric_cluster_size,
+                  "Parametric instances per cluster, 1-65536 (default 64)");
   cmd->add_option("--brick-triangles", args->brick_triangles,
                   "Most triangles per brick (default: derived from the memory budget)");
   cmd->add_flag("--resume", args->resume,
@@ -96,6 +99,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.memory_budget_bytes = parseByteSize(args->memory_budget, "--memory-budget");
     options.threads = args->threads;
     options.cluster_size = args->cluster_size;
+    options.parametric_cluster_size = args->parametric_cluster_size;
     options.max_brick_triangles = args->brick_triangles;
     options.resume = args->resume;
     options.keep_work_dir = args->keep_work;
