@@ -1,5 +1,6 @@
 // Exact-position keys for welding vertices that must be bit-identical (shared NURBS borders,
 // watertightness checks). Hashing the float bits, not rounded values, keeps welding exact.
+// Also integer grid cells, for searches of positions within a tolerance (cells of that size).
 #pragma once
 
 #include <bit>
@@ -26,6 +27,21 @@ struct PositionHash {
     uint64_t h = k.x * 0x9E3779B97F4A7C15ull;
     h ^= (h >> 29) + k.y * 0xBF58476D1CE4E5B9ull;
     h ^= (h >> 31) + k.z * 0x94D049BB133111EBull;
+    return static_cast<size_t>(h ^ (h >> 32));
+  }
+};
+
+// One cell of a uniform integer grid.
+struct GridCellKey {
+  int64_t x, y, z;
+  bool operator==(const GridCellKey&) const = default;
+};
+
+struct GridCellHash {
+  size_t operator()(const GridCellKey& k) const {
+    uint64_t h = static_cast<uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
+    h ^= (h >> 29) + static_cast<uint64_t>(k.y) * 0xBF58476D1CE4E5B9ull;
+    h ^= (h >> 31) + static_cast<uint64_t>(k.z) * 0x94D049BB133111EBull;
     return static_cast<size_t>(h ^ (h >> 32));
   }
 };

@@ -30,6 +30,7 @@
 #include <vector>
 
 #include "nurbs.h"
+#include "position_key.h"
 
 namespace tw {
 namespace {
@@ -185,18 +186,8 @@ struct UnionFind {
   }
 };
 
-struct CellKey {
-  int64_t x, y, z;
-  bool operator==(const CellKey&) const = default;
-};
-struct CellHash {
-  size_t operator()(const CellKey& k) const {
-    uint64_t h = static_cast<uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) + static_cast<uint64_t>(k.y) * 0xBF58476D1CE4E5B9ull;
-    h ^= (h >> 31) + static_cast<uint64_t>(k.z) * 0x94D049BB133111EBull;
-    return static_cast<size_t>(h ^ (h >> 32));
-  }
-};
+using CellKey = GridCellKey;
+using CellHash = GridCellHash;
 
 // Clusters of points closer than eps (transitively); returns the root (smallest index) of each.
 std::vector<uint32_t> clusterPoints(const std::vector<glm::vec3>& points, double eps) {

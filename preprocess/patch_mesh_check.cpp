@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <mutex>
 #include <sstream>
 #include <unordered_map>
 #include <vector>
@@ -18,35 +17,12 @@
 
 #include "nurbs.h"
 #include "position_key.h"
+#include "quiet_openmesh.h"
 
 namespace tw {
 namespace {
 
 using HalfEdgeMesh = OpenMesh::TriMesh_ArrayKernelT<>;
-
-// Silences OpenMesh's complaints about refused faces while a check runs: the report counts them.
-// Reference-counted so that concurrent checks restore the stream only when the last one ends.
-class QuietOpenMesh {
- public:
-  QuietOpenMesh() {
-    const std::lock_guard lock(mutex_);
-    if (users_++ == 0) {
-      was_enabled_ = ::omerr().is_enabled();
-      ::omerr().disable();
-    }
-  }
-  ~QuietOpenMesh() {
-    const std::lock_guard lock(mutex_);
-    if (--users_ == 0 && was_enabled_) ::omerr().enable();
-  }
-  QuietOpenMesh(const QuietOpenMesh&) = delete;
-  QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
-
- private:
-  static inline std::mutex mutex_;
-  static inline int users_ = 0;
-  static inline bool was_enabled_ = true;
-};
 
 constexpr int kSamples = 32;  // segments of a border's sample polyline
 
@@ -104,18 +80,8 @@ struct BorderCurve {
   }
 };
 
-struct CellKey {
-  int64_t x, y, z;
-  bool operator==(const CellKey&) const = default;
-};
-struct CellHash {
-  size_t operator()(const CellKey& k) const {
-    uint64_t h = static_cast<uint64_t>(k.x) * 0x9E3779B97F4A7C15ull;
-    h ^= (h >> 29) + static_cast<uint64_t>(k.y) * 0xBF58476D1CE4E5B9ull;
-    h ^= (h >> 31) + static_cast<uint64_t>(k.z) * 0x94D049BB133111EBull;
-    return static_cast<size_t>(h ^ (h >> 32));
-  }
-};
+using CellKey = GridCellKey;
+using CellHash = GridCellHash;
 
 std::string where(const glm::dvec3& p) {
   std::ostringstream s;

@@ -4,45 +4,18 @@
 
 #include <array>
 #include <bit>
-#include <mutex>
 #include <unordered_map>
 #include <vector>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
 #include "position_key.h"
+#include "quiet_openmesh.h"
 
 namespace tw {
 namespace {
 
 using HalfEdgeMesh = OpenMesh::TriMesh_ArrayKernelT<>;
-
-
-
-// Silences OpenMesh's complaints about refused faces while checks run: refusing them is the
-// expected outcome on a broken mesh, and the report counts them. Reference-counted so concurrent
-// checks restore the stream's state only when the last one finishes.
-class QuietOpenMesh {
- public:
-  QuietOpenMesh() {
-    const std::lock_guard lock(mutex_);
-    if (users_++ == 0) {
-      was_enabled_ = ::omerr().is_enabled();
-      ::omerr().disable();
-    }
-  }
-  ~QuietOpenMesh() {
-    const std::lock_guard lock(mutex_);
-    if (--users_ == 0 && was_enabled_) ::omerr().enable();
-  }
-  QuietOpenMesh(const QuietOpenMesh&) = delete;
-  QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
-
- private:
-  static inline std::mutex mutex_;
-  static inline int users_ = 0;
-  static inline bool was_enabled_ = true;
-};
 
 }  // namespace
 
