@@ -7,6 +7,7 @@
 #include <chrono>
 #include <thread>
 
+#include "camera_test_support.h"
 #include "camera_path.h"
 #include "egl_context.h"
 #include "frame_loop.h"
@@ -61,14 +62,7 @@ fs::path boxesPackage(const fs::path& dir, const std::string& name, const glm::d
   return out;
 }
 
-Camera lookingAt(const glm::dvec3& eye, const glm::dvec3& target) {
-  Camera camera;
-  camera.position = eye;
-  camera.lookAt(target);
-  camera.near_m = 0.05;
-  camera.far_m = 1000.0;
-  return camera;
-}
+using test::lookingAt;
 
 double coveredShare(GlRenderer& renderer, uint32_t object_limit) {
   std::vector<uint32_t> ids;

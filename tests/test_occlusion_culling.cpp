@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "camera_test_support.h"
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "package_rewrite.h"
@@ -86,14 +87,7 @@ fs::path wallPackage() {
   return path;
 }
 
-Camera lookingAt(const glm::dvec3& eye, const glm::dvec3& target) {
-  Camera camera;
-  camera.position = eye;
-  camera.lookAt(target);
-  camera.near_m = 0.05;
-  camera.far_m = 1000.0;
-  return camera;
-}
+using test::lookingAt;
 
 const glm::dvec3 kFront(-10.0, 0.0, 6.0);   // sees only the wall
 const glm::dvec3 kTarget(8.0, 0.0, 6.0);    // the balls' centre

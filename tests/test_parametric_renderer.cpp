@@ -9,6 +9,7 @@
 #include <numbers>
 #include <set>
 
+#include "camera_test_support.h"
 #include "camera_path.h"
 #include "egl_context.h"
 #include "frame_loop.h"
@@ -69,14 +70,7 @@ fs::path buildPackage(const std::string& name, const std::vector<Part>& parts, b
   return out;
 }
 
-Camera lookingAt(const glm::dvec3& eye, const glm::dvec3& target) {
-  Camera camera;
-  camera.position = eye;
-  camera.lookAt(target);
-  camera.near_m = 0.05;
-  camera.far_m = 1000.0;
-  return camera;
-}
+using test::lookingAt;
 
 struct Frame {
   std::vector<uint32_t> ids;
