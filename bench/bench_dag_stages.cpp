@@ -36,27 +36,13 @@
 #include "obj_reader.h"
 #include "scene_sink.h"
 #include "tessellate.h"
+#include "world_mesh_sink.h"
 
 namespace tw {
 namespace {
 
 constexpr uint32_t kClusterTriangles = 256;  // DagOptions' and the preprocessor's default
 constexpr uint32_t kGroupSize = 8;           // DagOptions' default
-
-class MeshSink : public SceneSink {
- public:
-  void onLayer(uint32_t, const Layer&) override {}
-  void onObject(const SceneObject& object) override {
-    const auto* mesh = std::get_if<TriangleMesh>(&object.geometry);
-    if (!mesh) return;
-    const auto base = static_cast<uint32_t>(positions.size());
-    for (const glm::vec3& p : mesh->positions)
-      positions.push_back(glm::vec3(object.info.transform.apply(p)));
-    for (uint32_t i : mesh->indices) indices.push_back(base + i);
-  }
-  std::vector<glm::vec3> positions;
-  std::vector<uint32_t> indices;
-};
 
 // The bunny, welded by exact position (the DAG's first step, so clusters share vertices).
 struct Bunny {
@@ -79,7 +65,7 @@ const Bunny& bunny() {
       out.error = "shared data not present: " + path.string();
       return out;
     }
-    MeshSink sink;
+    WorldMeshSink sink;
     ReadOptions options;
     options.max_part_triangles = 1u << 24;
     readObj(path, sink, options);

@@ -25,6 +25,7 @@
 #include "package_format.h"
 #include "page_codec.h"
 #include "scene_sink.h"
+#include "world_mesh_sink.h"
 
 namespace tw {
 namespace {
@@ -32,22 +33,6 @@ namespace {
 constexpr uint32_t kClusterTriangles = 256;
 constexpr uint32_t kTrianglesPerObject = 512;
 constexpr double kStepM = pkg::kDefaultPositionStepM;
-
-// Keeps the first mesh of the file in one piece (the bunny is one object).
-class MeshSink : public SceneSink {
- public:
-  void onLayer(uint32_t, const Layer&) override {}
-  void onObject(const SceneObject& object) override {
-    const auto* mesh = std::get_if<TriangleMesh>(&object.geometry);
-    if (!mesh) return;
-    const auto base = static_cast<uint32_t>(positions.size());
-    for (const glm::vec3& p : mesh->positions)
-      positions.push_back(glm::vec3(object.info.transform.apply(p)));
-    for (uint32_t i : mesh->indices) indices.push_back(base + i);
-  }
-  std::vector<glm::vec3> positions;
-  std::vector<uint32_t> indices;
-};
 
 struct Cluster {
   std::vector<glm::vec3> positions;  // compact
@@ -81,7 +66,7 @@ const Corpus& corpus() {
       out.error = "shared data not present: " + path.string();
       return out;
     }
-    MeshSink sink;
+    WorldMeshSink sink;
     ReadOptions options;
     options.max_part_triangles = 1u << 24;
     readObj(path, sink, options);

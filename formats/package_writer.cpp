@@ -9,7 +9,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <functional>
 #include <initializer_list>
 #include <limits>
 #include <stdexcept>
@@ -545,22 +544,28 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   const size_t first_memory_page = page_records.size();
   page_records.resize(first_memory_page + storage.pages.size());
   const TableSpill* tables = storage.tables.get();
-  // Every cluster record, spilled ones first, in chunks.
-  auto for_each_cluster = [&](const std::function<void(const ClusterRecord&)>& fn) {
-    if (tables)
-      tables->clusters.forEachChunk(4u << 20, [&](std::span<const uint8_t> chunk) {
-        for (size_t at = 0; at < chunk.size(); at += sizeof(ClusterRecord)) {
-          ClusterRecord c;
-          std::memcpy(&c, chunk.data() + at, sizeof c);
-          fn(c);
-        }
-      });
-    for (const ClusterRecord& c : storage.clusters) fn(c);
-  };
-  for_each_cluster([&](const ClusterRecord& c) {
+  // One pass over the cluster records (spilled ones first, in chunks): clusters per page and the
+  // header's aggregates.
+  PackageHeader h{};
+  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  auto visit_cluster = [&](const ClusterRecord& c) {
     if (c.kind == static_cast<uint8_t>(ClusterKind::Mesh) && c.page < page_records.size())
       ++page_records[c.page].cluster_count;
-  });
+    lo = glm::min(lo, glm::vec3(c.aabb_min[0], c.aabb_min[1], c.aabb_min[2]));
+    hi = glm::max(hi, glm::vec3(c.aabb_max[0], c.aabb_max[1], c.aabb_max[2]));
+    h.level_count = std::max<uint32_t>(h.level_count, c.level + 1u);
+    h.max_cluster_triangles = std::max(h.max_cluster_triangles, c.triangle_count);
+    if (c.level == 0) h.total_triangles += c.triangle_count;
+  };
+  if (tables)
+    tables->clusters.forEachChunk(4u << 20, [&](std::span<const uint8_t> chunk) {
+      for (size_t at = 0; at < chunk.size(); at += sizeof(ClusterRecord)) {
+        ClusterRecord c;
+        std::memcpy(&c, chunk.data() + at, sizeof c);
+        visit_cluster(c);
+      }
+    });
+  for (const ClusterRecord& c : storage.clusters) visit_cluster(c);
   std::vector<uint8_t> page_data;
   std::vector<uint8_t> compressed;
   for (size_t i = 0; i < storage.pages.size(); ++i) {
@@ -578,7 +583,6 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   }
 
   // Header.
-  PackageHeader h{};
   std::memcpy(h.magic, kMagic, sizeof(kMagic));
   h.version = kVersion;
   h.minor_version = kMinorVersion;
@@ -596,14 +600,6 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   for (int a = 0; a < 3; ++a) h.origin[a] = storage.origin[a];
   h.position_step_m = storage.position_step_m;
   h.target_page_bytes = storage.target_page_bytes;
-  glm::vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  for_each_cluster([&](const ClusterRecord& c) {
-    lo = glm::min(lo, glm::vec3(c.aabb_min[0], c.aabb_min[1], c.aabb_min[2]));
-    hi = glm::max(hi, glm::vec3(c.aabb_max[0], c.aabb_max[1], c.aabb_max[2]));
-    h.level_count = std::max<uint32_t>(h.level_count, c.level + 1u);
-    h.max_cluster_triangles = std::max(h.max_cluster_triangles, c.triangle_count);
-    if (c.level == 0) h.total_triangles += c.triangle_count;
-  });
   if (storage.clusterCount() == 0) lo = hi = glm::vec3(0.0f);
   setVec3(h.bounds_min, lo);
   setVec3(h.bounds_max, hi);

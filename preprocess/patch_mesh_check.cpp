@@ -15,6 +15,7 @@
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
+#include "exact_weld.h"
 #include "nurbs.h"
 #include "position_key.h"
 #include "quiet_openmesh.h"
@@ -97,56 +98,19 @@ bool PatchMeshReport::ok() const {
 
 PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& patches, float tolerance) {
   PatchMeshReport report;
-  const size_t vertex_count = mesh.positions.size();
-
-  // Exact weld: one vertex per distinct position bits, created when a face first uses it.
-  std::unordered_map<PositionKey, uint32_t, PositionHash> welded;
-  welded.reserve(vertex_count);
-  std::vector<uint32_t> remap(vertex_count, UINT32_MAX);
-  std::vector<glm::dvec3> points;
-  auto weld = [&](uint32_t index) {
-    if (remap[index] == UINT32_MAX) {
-      const auto [it, inserted] =
-          welded.try_emplace(positionKeyOf(mesh.positions[index]), static_cast<uint32_t>(points.size()));
-      if (inserted) points.push_back(glm::dvec3(mesh.positions[index]));
-      remap[index] = it->second;
-    }
-    return remap[index];
-  };
-  std::vector<std::array<uint32_t, 3>> triangles;
-  triangles.reserve(mesh.indices.size() / 3);
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const uint32_t i0 = mesh.indices[t], i1 = mesh.indices[t + 1], i2 = mesh.indices[t + 2];
-    if (i0 >= vertex_count || i1 >= vertex_count || i2 >= vertex_count) {
+  // Exact weld (exact_weld.h); the geometry below works in double.
+  const WeldedTriangles welded = weldExactly(mesh);
+  const std::vector<std::array<uint32_t, 3>>& triangles = welded.triangles;
+  const std::vector<glm::dvec3> points(welded.points.begin(), welded.points.end());
+  report.degenerate_faces = welded.skipped;
+  for (const auto& [a, b, c] : triangles)  // zero area, kept in the mesh
+    if (glm::length(glm::cross(points[b] - points[a], points[c] - points[a])) == 0.0)
       ++report.degenerate_faces;
-      continue;
-    }
-    const uint32_t a = weld(i0), b = weld(i1), c = weld(i2);
-    if (a == b || b == c || c == a) {
-      ++report.degenerate_faces;
-      continue;
-    }
-    if (glm::length(glm::cross(points[b] - points[a], points[c] - points[a])) == 0.0) ++report.degenerate_faces;
-    triangles.push_back({a, b, c});
-  }
   report.vertices = points.size();
 
   // Orientation: an edge shared by two faces must be used once in each direction.
-  {
-    struct EdgeUse {
-      uint32_t forward = 0, backward = 0;
-    };
-    std::unordered_map<uint64_t, EdgeUse> edges;
-    edges.reserve(triangles.size() * 2);
-    for (const auto& tri : triangles)
-      for (int e = 0; e < 3; ++e) {
-        const uint32_t a = tri[e], b = tri[(e + 1) % 3];
-        EdgeUse& use = edges[(uint64_t{std::min(a, b)} << 32) | std::max(a, b)];
-        ++(a < b ? use.forward : use.backward);
-      }
-    for (const auto& [key, use] : edges)
-      if (use.forward + use.backward == 2 && use.forward != 1) ++report.inconsistent_orientation;
-  }
+  for (const auto& [key, use] : countEdgeUses(triangles))
+    if (use.forward + use.backward == 2 && use.forward != 1) ++report.inconsistent_orientation;
 
   // The half-edge mesh: OpenMesh refuses faces that would make an edge or a vertex non-manifold
   // (an edge used twice in one direction among them).

@@ -3,13 +3,11 @@
 #include "watertight_check.h"
 
 #include <array>
-#include <bit>
-#include <unordered_map>
 #include <vector>
 
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 
-#include "position_key.h"
+#include "exact_weld.h"
 #include "quiet_openmesh.h"
 
 namespace tw {
@@ -21,53 +19,16 @@ using HalfEdgeMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 
 MeshTopologyReport checkWatertight(const TriangleMesh& mesh) {
   MeshTopologyReport report;
-  const size_t vertex_count = mesh.positions.size();
-
-  // Weld: one half-edge vertex per distinct position, created when a face first uses it.
-  std::unordered_map<PositionKey, uint32_t, PositionHash> welded;
-  welded.reserve(vertex_count);
-  std::vector<uint32_t> remap(vertex_count, UINT32_MAX);
-  std::vector<glm::vec3> points;
-  auto weld = [&](uint32_t index) {
-    if (remap[index] == UINT32_MAX) {
-      const auto [it, inserted] = welded.try_emplace(positionKeyOf(mesh.positions[index]), static_cast<uint32_t>(points.size()));
-      if (inserted) points.push_back(mesh.positions[index]);
-      remap[index] = it->second;
-    }
-    return remap[index];
-  };
-
-  std::vector<std::array<uint32_t, 3>> triangles;
-  triangles.reserve(mesh.indices.size() / 3);
-  for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-    const uint32_t i0 = mesh.indices[t], i1 = mesh.indices[t + 1], i2 = mesh.indices[t + 2];
-    if (i0 >= vertex_count || i1 >= vertex_count || i2 >= vertex_count) {
-      ++report.degenerate_faces;
-      continue;
-    }
-    const uint32_t a = weld(i0), b = weld(i1), c = weld(i2);
-    if (a == b || b == c || c == a) {
-      ++report.degenerate_faces;
-      continue;
-    }
-    triangles.push_back({a, b, c});
-  }
+  // Weld (exact_weld.h): one half-edge vertex per distinct position used by a face.
+  const WeldedTriangles welded = weldExactly(mesh);
+  const std::vector<glm::vec3>& points = welded.points;
+  const std::vector<std::array<uint32_t, 3>>& triangles = welded.triangles;
+  report.degenerate_faces = welded.skipped;
   report.vertices = points.size();
 
   // Non-manifold edges from directed-edge uses: a closed oriented manifold uses every edge once
   // in each direction.
-  struct EdgeUse {
-    uint32_t forward = 0, backward = 0;
-  };
-  std::unordered_map<uint64_t, EdgeUse> edges;
-  edges.reserve(triangles.size() * 2);
-  for (const auto& tri : triangles)
-    for (int e = 0; e < 3; ++e) {
-      const uint32_t a = tri[e], b = tri[(e + 1) % 3];
-      EdgeUse& use = edges[(uint64_t{std::min(a, b)} << 32) | std::max(a, b)];
-      ++(a < b ? use.forward : use.backward);
-    }
-  for (const auto& [key, use] : edges)
+  for (const auto& [key, use] : countEdgeUses(triangles))
     if (use.forward + use.backward > 2 || use.forward > 1 || use.backward > 1) ++report.non_manifold_edges;
 
   // The half-edge mesh: OpenMesh refuses faces that would make an edge or vertex non-manifold.

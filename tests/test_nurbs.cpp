@@ -11,32 +11,15 @@
 #include "nurbs.h"
 #include "tessellate.h"
 #include "watertight_check.h"
+#include "nurbs_test_support.h"
 
 namespace tw {
 namespace {
 
 constexpr float kW = 0.70710678f;  // weight of the middle point of a rational quarter circle
 
-std::vector<float> clampedKnots(uint32_t degree, uint32_t count, float a = 0.0f, float b = 1.0f) {
-  std::vector<float> k;
-  const uint32_t interior = count - degree - 1;
-  for (uint32_t i = 0; i <= degree; ++i) k.push_back(a);
-  for (uint32_t i = 1; i <= interior; ++i) k.push_back(a + (b - a) * static_cast<float>(i) / static_cast<float>(interior + 1));
-  for (uint32_t i = 0; i <= degree; ++i) k.push_back(b);
-  return k;
-}
-
-NurbsPatch makePatch(uint32_t du, uint32_t dv, uint32_t cu, uint32_t cv, std::vector<glm::vec4> points) {
-  NurbsPatch p;
-  p.degree_u = du;
-  p.degree_v = dv;
-  p.count_u = cu;
-  p.count_v = cv;
-  p.knots_u = clampedKnots(du, cu);
-  p.knots_v = clampedKnots(dv, cv);
-  p.control_points = std::move(points);
-  return p;
-}
+using test::clampedKnots;
+using test::makePatch;
 
 // Quarter k (0..3) of the circle of radius r at height z, as rational quadratic control points
 // running counter-clockwise. Exact floats: only 0 and +-r appear.

@@ -19,6 +19,7 @@
 #include "scene_io.h"
 #include "tessellate.h"
 #include "test_support.h"
+#include "nurbs_test_support.h"
 
 namespace tw {
 namespace {
@@ -26,25 +27,8 @@ namespace {
 // ---------------------------------------------------------------------------------------------
 // Patch construction helpers.
 
-std::vector<float> clampedKnots(uint32_t degree, uint32_t count) {
-  std::vector<float> k(degree + 1, 0.0f);
-  const uint32_t interior = count - degree - 1;
-  for (uint32_t i = 1; i <= interior; ++i) k.push_back(static_cast<float>(i) / static_cast<float>(interior + 1));
-  k.insert(k.end(), degree + 1, 1.0f);
-  return k;
-}
-
-NurbsPatch makePatch(uint32_t du, uint32_t dv, uint32_t cu, uint32_t cv, std::vector<glm::vec4> points) {
-  NurbsPatch p;
-  p.degree_u = du;
-  p.degree_v = dv;
-  p.count_u = cu;
-  p.count_v = cv;
-  p.knots_u = clampedKnots(du, cu);
-  p.knots_v = clampedKnots(dv, cv);
-  p.control_points = std::move(points);
-  return p;
-}
+using test::clampedKnots;
+using test::makePatch;
 
 glm::dvec4 homogeneous(const glm::vec4& c) { return {double(c.x) * c.w, double(c.y) * c.w, double(c.z) * c.w, c.w}; }
 glm::vec4 cartesian(const glm::dvec4& h) { return glm::vec4(glm::dvec3(h) / h.w, h.w); }
