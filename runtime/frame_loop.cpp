@@ -230,6 +230,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   last_parametric_view_.near_m = camera.near_m;
   last_parametric_view_.pixel_scale = camera.pixelScale(renderer_->height());
   last_parametric_view_.min_feature_px = options_.reference ? 0.0 : options_.min_feature_px;
+  last_parametric_view_.tolerance_px = tau_px_;
   last_position_ = camera.position;
   last_time_s_ = time_s;
 

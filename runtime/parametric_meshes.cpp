@@ -6,8 +6,11 @@
 #include <GL/glcorearb.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -41,12 +44,93 @@ Primitive primitiveOf(const pkg::InstanceRecord& in, std::span<const glm::vec2> 
   return Sphere{0.0f};  // unknown type (the view rejects it): tessellates to nothing
 }
 
+namespace {
+bool positive(float v) { return std::isfinite(v) && v > 0.0f; }
+}  // namespace
+
+bool instanceLocalBox(const pkg::InstanceRecord& in, std::span<const glm::vec2> profile_points,
+                      glm::vec3& lo, glm::vec3& hi) {
+  const float* p = in.params;
+  switch (static_cast<pkg::PrimitiveType>(in.type)) {
+    case pkg::PrimitiveType::Cylinder:
+      if (!positive(p[0]) || !positive(p[1])) return false;
+      lo = {-p[0], -p[0], 0.0f};
+      hi = {p[0], p[0], p[1]};
+      return true;
+    case pkg::PrimitiveType::Cone: {
+      if (!(p[0] >= 0.0f) || !(p[1] >= 0.0f) || !positive(p[2]) || !positive(std::max(p[0], p[1])))
+        return false;
+      const float r = std::max(p[0], p[1]);
+      lo = {-r, -r, 0.0f};
+      hi = {r, r, p[2]};
+      return true;
+    }
+    case pkg::PrimitiveType::Sphere:
+      if (!positive(p[0])) return false;
+      lo = glm::vec3(-p[0]);
+      hi = glm::vec3(p[0]);
+      return true;
+    case pkg::PrimitiveType::TorusSegment: {
+      const float major = p[0], minor = p[1], sweep = p[2];
+      if (!positive(major) || !positive(minor) || minor >= major || !positive(sweep)) return false;
+      // The annular sector's box: its end directions and the axis directions it sweeps over, at
+      // both radii; the tube adds +-minor in z.
+      glm::vec2 a(std::numeric_limits<float>::max()), b(-std::numeric_limits<float>::max());
+      auto add = [&](double angle) {
+        const glm::vec2 dir(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
+        for (float r : {major - minor, major + minor}) {
+          a = glm::min(a, r * dir);
+          b = glm::max(b, r * dir);
+        }
+      };
+      const double s = std::min<double>(sweep, 2.0 * std::numbers::pi);
+      add(0.0);
+      add(s);
+      for (int k = 1; k < 4; ++k)
+        if (k * 0.5 * std::numbers::pi < s) add(k * 0.5 * std::numbers::pi);
+      lo = {a.x, a.y, -minor};
+      hi = {b.x, b.y, minor};
+      return true;
+    }
+    case pkg::PrimitiveType::Box:
+      if (!positive(p[0]) || !positive(p[1]) || !positive(p[2])) return false;
+      lo = {-p[0], -p[1], -p[2]};
+      hi = {p[0], p[1], p[2]};
+      return true;
+    case pkg::PrimitiveType::Extrusion:
+    case pkg::PrimitiveType::Revolution: {
+      if (in.profile_count < 2 || in.profile_first > profile_points.size() ||
+          in.profile_count > profile_points.size() - in.profile_first || !positive(p[0]))
+        return false;
+      glm::vec2 a(std::numeric_limits<float>::max()), b(-std::numeric_limits<float>::max());
+      for (const glm::vec2& q : profile_points.subspan(in.profile_first, in.profile_count)) {
+        a = glm::min(a, q);
+        b = glm::max(b, q);
+      }
+      if (!std::isfinite(a.x) || !std::isfinite(a.y) || !std::isfinite(b.x) || !std::isfinite(b.y))
+        return false;
+      if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Extrusion)) {
+        lo = {a.x, a.y, 0.0f};  // the profile swept along +Z over the height
+        hi = {b.x, b.y, p[0]};
+      } else {
+        const float r = std::max(std::fabs(a.x), std::fabs(b.x));  // (r, z) about +Z, any sweep
+        lo = {-r, -r, a.y};
+        hi = {r, r, b.y};
+      }
+      return true;
+    }
+    default:
+      return false;
+  }
+}
+
 glm::dvec3 clusterAnchor(const pkg::ClusterRecord& c) {
   return glm::dvec3(c.center[0], c.center[1], c.center[2]);
 }
 
 void tessellateCluster(const PackageView& view, uint32_t cluster, float tolerance_m,
-                       std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices) {
+                       std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices,
+                       std::vector<uint32_t>* instance_offsets) {
   if (cluster >= view.clusters().size() ||
       view.clusters()[cluster].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
     throw std::out_of_range("tessellateCluster: cluster " + std::to_string(cluster) +
@@ -58,6 +142,7 @@ void tessellateCluster(const PackageView& view, uint32_t cluster, float toleranc
                             " instance range is outside the table");
   const glm::dvec3 anchor = clusterAnchor(c);
   TriangleMesh mesh;
+  if (instance_offsets) instance_offsets->assign(1, static_cast<uint32_t>(indices.size()));
   for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i) {
     const pkg::InstanceRecord& in = instances[i];
     mesh.positions.clear();
@@ -70,6 +155,7 @@ void tessellateCluster(const PackageView& view, uint32_t cluster, float toleranc
     const uint32_t base = static_cast<uint32_t>(vertices.size());
     for (const glm::vec3& q : mesh.positions) vertices.push_back({origin + linear * q, in.object});
     for (uint32_t index : mesh.indices) indices.push_back(base + index);
+    if (instance_offsets) instance_offsets->push_back(static_cast<uint32_t>(indices.size()));
   }
 }
 
@@ -80,6 +166,7 @@ using Clock = std::chrono::steady_clock;
 struct CachedMesh {
   GLuint vertex_buffer = 0, index_buffer = 0;
   uint32_t index_count = 0;
+  std::vector<uint32_t> instance_offsets;  // first index of each instance, and the end
   uint64_t bytes = 0;
   uint64_t last_used = 0;
 };
@@ -113,8 +200,9 @@ struct ParametricMeshes::Impl {
     indices.clear();
     const double tolerance = options.fixed_tolerance_m > 0.0 ? options.fixed_tolerance_m
                                                              : bucketToleranceM(bucket);
-    tessellateCluster(*view, cluster, static_cast<float>(tolerance), vertices, indices);
     CachedMesh mesh;
+    tessellateCluster(*view, cluster, static_cast<float>(tolerance), vertices, indices,
+                      &mesh.instance_offsets);
     mesh.index_count = static_cast<uint32_t>(indices.size());
     if (indices.empty()) return mesh;
     glCreateBuffers(1, &mesh.vertex_buffer);
@@ -125,6 +213,21 @@ struct ParametricMeshes::Impl {
                          indices.data(), 0);
     mesh.bytes = vertices.size() * sizeof(vertices[0]) + indices.size() * sizeof(indices[0]);
     return mesh;
+  }
+
+  // The mesh of `cluster` at bucket `wanted`, built now unless build_ms_per_frame has passed since
+  // `start` and another bucket is cached (never a hole).
+  CachedMesh* meshFor(uint32_t cluster, int wanted, Clock::time_point start, ParametricMeshStats& stats) {
+    if (auto it = cache.find(meshKey(cluster, wanted)); it != cache.end()) return &it->second;
+    const bool over_budget =
+        std::chrono::duration<double, std::milli>(Clock::now() - start).count() > options.build_ms_per_frame;
+    if (over_budget)
+      for (int b = 0; b < kBucketCount; ++b)
+        if (auto it = cache.find(meshKey(cluster, b)); it != cache.end()) return &it->second;
+    CachedMesh built = build(cluster, wanted);
+    cached_bytes += built.bytes;
+    ++stats.meshes_built;
+    return &cache.emplace(meshKey(cluster, wanted), std::move(built)).first->second;
   }
 
   // Drops the least recently used meshes not used in `frame` until the cache fits its budget.
@@ -194,21 +297,7 @@ ParametricMeshStats ParametricMeshes::draw(std::span<const uint32_t> clusters,
   for (uint32_t cluster : clusters) {
     if (cluster >= s.view->clusters().size()) continue;
     const int wanted = s.options.fixed_tolerance_m > 0.0 ? 0 : bucketFor(cluster, eye, pixel_scale, near_m);
-    CachedMesh* mesh = nullptr;
-    if (auto it = s.cache.find(meshKey(cluster, wanted)); it != s.cache.end()) mesh = &it->second;
-    const bool over_budget =
-        std::chrono::duration<double, std::milli>(Clock::now() - start).count() >
-        s.options.build_ms_per_frame;
-    if (!mesh && over_budget) {  // any other bucket already built stands in
-      for (int b = 0; b < kBucketCount && !mesh; ++b)
-        if (auto it = s.cache.find(meshKey(cluster, b)); it != s.cache.end()) mesh = &it->second;
-    }
-    if (!mesh) {
-      CachedMesh built = s.build(cluster, wanted);
-      s.cached_bytes += built.bytes;
-      mesh = &s.cache.emplace(meshKey(cluster, wanted), built).first->second;
-      ++stats.meshes_built;
-    }
+    CachedMesh* mesh = s.meshFor(cluster, wanted, start, stats);
     mesh->last_used = frame;
     if (mesh->index_count == 0) continue;
     const glm::vec3 anchor_eye(clusterAnchor(s.view->clusters()[cluster]) - eye);
@@ -219,6 +308,88 @@ ParametricMeshStats ParametricMeshes::draw(std::span<const uint32_t> clusters,
     ++stats.clusters_drawn;
     stats.instances_drawn += s.view->clusters()[cluster].instance_count;
     stats.triangles_drawn += mesh->index_count / 3;
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);
+  s.evict(frame);
+  stats.meshes_cached = static_cast<uint32_t>(s.cache.size());
+  stats.cached_bytes = s.cached_bytes;
+  return stats;
+}
+
+ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMeshInstance> instances,
+                                                    const glm::dvec3& eye,
+                                                    const glm::mat4& view_projection,
+                                                    double pixel_scale, double tolerance_px,
+                                                    uint32_t object_color_count, uint64_t frame) {
+  Impl& s = *impl_;
+  ParametricMeshStats stats;
+  if (instances.empty()) return stats;
+  const auto start = Clock::now();
+  glUseProgram(s.program);
+  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                            &view_projection[0][0]);
+  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
+  glBindVertexArray(s.vertex_array);
+  const auto records = s.view->clusters();
+  std::array<std::vector<uint32_t>, kBucketCount> by_bucket;  // instance offsets in the cluster
+  std::vector<GLsizei> counts;
+  std::vector<const void*> offsets;
+  for (size_t k = 0; k < instances.size();) {
+    const uint32_t cluster = instances[k].cluster;
+    size_t end = k;
+    while (end < instances.size() && instances[end].cluster == cluster) ++end;
+    if (cluster >= records.size()) {
+      k = end;
+      continue;
+    }
+    const pkg::ClusterRecord& record = records[cluster];
+    for (auto& list : by_bucket) list.clear();
+    for (size_t j = k; j < end; ++j) {
+      const uint32_t i = instances[j].instance;
+      if (i < record.instance_first || i - record.instance_first >= record.instance_count) continue;
+      int bucket = 0;
+      if (s.options.fixed_tolerance_m <= 0.0) {
+        const double allowed_m = tolerance_px * std::max(instances[j].distance_m, 1e-6) /
+                                 std::max(pixel_scale, 1e-9);
+        while (bucket + 1 < kBucketCount && bucketToleranceM(bucket + 1) <= allowed_m) ++bucket;
+      }
+      by_bucket[size_t(bucket)].push_back(i - record.instance_first);
+    }
+    const glm::vec3 anchor_eye(clusterAnchor(record) - eye);
+    bool drawn = false;
+    for (int bucket = 0; bucket < kBucketCount; ++bucket) {
+      if (by_bucket[size_t(bucket)].empty()) continue;
+      CachedMesh* mesh = s.meshFor(cluster, bucket, start, stats);
+      mesh->last_used = frame;
+      if (mesh->index_count == 0 || mesh->instance_offsets.size() != record.instance_count + 1u) continue;
+      counts.clear();
+      offsets.clear();
+      for (uint32_t local : by_bucket[size_t(bucket)]) {
+        const uint32_t first = mesh->instance_offsets[local], last = mesh->instance_offsets[local + 1];
+        if (last <= first) continue;
+        // Consecutive instances merge into one range.
+        if (!counts.empty() &&
+            reinterpret_cast<uintptr_t>(offsets.back()) + uintptr_t(counts.back()) * sizeof(uint32_t) ==
+                uintptr_t(first) * sizeof(uint32_t)) {
+          counts.back() += GLsizei(last - first);
+        } else {
+          counts.push_back(GLsizei(last - first));
+          offsets.push_back(reinterpret_cast<const void*>(uintptr_t(first) * sizeof(uint32_t)));
+        }
+        stats.triangles_drawn += (last - first) / 3;
+        ++stats.instances_drawn;
+      }
+      if (counts.empty()) continue;
+      glProgramUniform3fv(s.program, gl::kParamMeshAnchorLocation, 1, &anchor_eye[0]);
+      glVertexArrayVertexBuffer(s.vertex_array, 0, mesh->vertex_buffer, 0, sizeof(ParametricVertex));
+      glVertexArrayElementBuffer(s.vertex_array, mesh->index_buffer);
+      glMultiDrawElements(GL_TRIANGLES, counts.data(), GL_UNSIGNED_INT, offsets.data(),
+                          GLsizei(counts.size()));
+      drawn = true;
+    }
+    stats.clusters_drawn += drawn;
+    k = end;
   }
   glBindVertexArray(0);
   glUseProgram(0);

@@ -45,10 +45,28 @@ Primitive primitiveOf(const pkg::InstanceRecord& instance, std::span<const glm::
 
 // Appends the triangles of every instance of parametric cluster `cluster` at chordal tolerance
 // `tolerance_m`, placed relative to the cluster's anchor. Instances whose parameters
-// tessellate to nothing (invalid) add nothing. Throws std::out_of_range for a cluster that is not
-// parametric or out of range.
+// tessellate to nothing (invalid) add nothing. `instance_offsets`, when given, receives the first
+// index of each instance and the end (instance_count + 1 entries). Throws std::out_of_range for a
+// cluster that is not parametric or out of range.
 void tessellateCluster(const PackageView& view, uint32_t cluster, float tolerance_m,
-                       std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices);
+                       std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices,
+                       std::vector<uint32_t>* instance_offsets = nullptr);
+
+// One instance of a parametric cluster to draw from the cluster's mesh, at the resolution its own
+// distance asks for.
+struct ParametricMeshInstance {
+  uint32_t cluster = 0;
+  uint32_t instance = 0;     // index into the instance table, within the cluster's range
+  double distance_m = 0.0;   // from the eye to the instance's nearest point (bounding sphere)
+};
+
+// The box an instance's primitive fills in its canonical frame: tight for cylinders, cones,
+// spheres, torus segments (their sweep) and boxes, the profile's box swept for extrusions and a
+// full turn's for revolutions; false for unknown types and for parameters that draw nothing
+// (non-positive or non-finite sizes, a torus whose tube reaches its axis, a profile outside the
+// table).
+bool instanceLocalBox(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points,
+                      glm::vec3& lo, glm::vec3& hi);
 
 // The anchor of a parametric cluster: its bounding-sphere centre, package frame metres.
 glm::dvec3 clusterAnchor(const pkg::ClusterRecord& cluster);
@@ -82,6 +100,13 @@ class ParametricMeshes {
   ParametricMeshStats draw(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                            const glm::mat4& view_projection, double pixel_scale, double near_m,
                            uint32_t object_color_count, uint64_t frame);
+  // Draws single instances, each from its cluster's mesh at the bucket of its own distance with
+  // `tolerance_px` (consecutive entries of one cluster share its meshes; one multi-draw per
+  // cluster mesh used). Same GL contract as draw().
+  ParametricMeshStats drawInstances(std::span<const ParametricMeshInstance> instances,
+                                    const glm::dvec3& eye, const glm::mat4& view_projection,
+                                    double pixel_scale, double tolerance_px,
+                                    uint32_t object_color_count, uint64_t frame);
 
  private:
   struct Impl;

@@ -11,14 +11,13 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
-#include <numbers>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "gl_program.h"
 #include "parametric_gpu.h"
+#include "parametric_instance_meshes.h"
 #include "parametric_shaders.h"
 
 namespace tw {
@@ -67,64 +66,8 @@ struct DrawArraysIndirectCommand {
 };
 static_assert(sizeof(DrawArraysIndirectCommand) == 16);
 
-bool positive(float v) { return std::isfinite(v) && v > 0.0f; }
-
-// The canonical-frame proxy box of an instance; false for parameters the shaders cannot draw
-// (the instance is then left degenerate: it rasterizes nothing).
-bool localBox(const pkg::InstanceRecord& in, glm::vec3& lo, glm::vec3& hi) {
-  const float* p = in.params;
-  switch (static_cast<pkg::PrimitiveType>(in.type)) {
-    case pkg::PrimitiveType::Cylinder:
-      if (!positive(p[0]) || !positive(p[1])) return false;
-      lo = {-p[0], -p[0], 0.0f};
-      hi = {p[0], p[0], p[1]};
-      return true;
-    case pkg::PrimitiveType::Cone: {
-      if (!(p[0] >= 0.0f) || !(p[1] >= 0.0f) || !positive(p[2]) || !positive(std::max(p[0], p[1])))
-        return false;
-      const float r = std::max(p[0], p[1]);
-      lo = {-r, -r, 0.0f};
-      hi = {r, r, p[2]};
-      return true;
-    }
-    case pkg::PrimitiveType::Sphere:
-      if (!positive(p[0])) return false;
-      lo = glm::vec3(-p[0]);
-      hi = glm::vec3(p[0]);
-      return true;
-    case pkg::PrimitiveType::TorusSegment: {
-      const float major = p[0], minor = p[1], sweep = p[2];
-      if (!positive(major) || !positive(minor) || minor >= major || !positive(sweep)) return false;
-      // The annular sector's box: its end directions and the axis directions it sweeps over, at
-      // both radii; the tube adds +-minor in z.
-      glm::vec2 a(std::numeric_limits<float>::max()), b(-std::numeric_limits<float>::max());
-      auto add = [&](double angle) {
-        const glm::vec2 dir(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
-        for (float r : {major - minor, major + minor}) {
-          a = glm::min(a, r * dir);
-          b = glm::max(b, r * dir);
-        }
-      };
-      const double s = std::min<double>(sweep, 2.0 * std::numbers::pi);
-      add(0.0);
-      add(s);
-      for (int k = 1; k < 4; ++k)
-        if (k * 0.5 * std::numbers::pi < s) add(k * 0.5 * std::numbers::pi);
-      lo = {a.x, a.y, -minor};
-      hi = {b.x, b.y, minor};
-      return true;
-    }
-    case pkg::PrimitiveType::Box:
-      if (!positive(p[0]) || !positive(p[1]) || !positive(p[2])) return false;
-      lo = {-p[0], -p[1], -p[2]};
-      hi = {p[0], p[1], p[2]};
-      return true;
-    default:
-      return false;
-  }
-}
-
-gpu::GpuInstance gpuInstance(const pkg::InstanceRecord& in, const glm::dvec3& anchor) {
+gpu::GpuInstance gpuInstance(const pkg::InstanceRecord& in, std::span<const glm::vec2> profile_points,
+                             const glm::dvec3& anchor) {
   gpu::GpuInstance g{};
   g.origin_m = glm::vec3(glm::dvec3(in.origin[0], in.origin[1], in.origin[2]) - anchor);
   g.object = in.object;
@@ -134,7 +77,7 @@ gpu::GpuInstance gpuInstance(const pkg::InstanceRecord& in, const glm::dvec3& an
   g.type = in.type;
   g.flags = in.flags & pkg::kInstanceCapped;
   glm::vec3 lo(0.0f), hi(0.0f);
-  if (!localBox(in, lo, hi)) lo = hi = glm::vec3(0.0f);  // degenerate: draws nothing
+  if (!instanceLocalBox(in, profile_points, lo, hi)) lo = hi = glm::vec3(0.0f);  // degenerate: draws nothing
   g.local_min = lo;
   g.local_max = hi;
   return g;
@@ -146,13 +89,17 @@ struct ParametricRenderer::Impl {
   const PackageView* view = nullptr;
   GlRenderer* renderer = nullptr;
   std::unique_ptr<ParametricMeshes> meshes;
+  std::unique_ptr<ParametricInstanceMeshes> instance_meshes;
+  bool fixed_tolerance = false;  // references: every mesh at one tolerance, per cluster
   std::array<GLuint, kImpostorTypes> programs{};         // eye outside the proxy (box: all)
   std::array<GLuint, kImpostorTypes> inside_programs{};  // eye inside (ray-cast types only)
   GLuint instance_buffer = 0, draw_buffer = 0, indirect_buffer = 0, vertex_array = 0;
   uint64_t instance_bytes = 0;
   // Per-frame scratch, kept to avoid allocation in steady frames.
   std::array<std::vector<uint32_t>, kImpostorTypes> by_type;
-  std::vector<uint32_t> mesh_clusters;
+  std::vector<uint32_t> mesh_clusters;      // tessellated per cluster
+  std::vector<uint32_t> instance_clusters;  // tessellated per instance
+  std::vector<ParametricMeshInstance> profile_instances;  // their extrusions and revolutions
   std::vector<gpu::GpuParametricDraw> draws;
   std::vector<DrawArraysIndirectCommand> commands;
 
@@ -191,6 +138,8 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
                        name + " (eye inside)");
   }
   s.meshes = std::make_unique<ParametricMeshes>(view, mesh_options);
+  s.instance_meshes = std::make_unique<ParametricInstanceMeshes>(view);
+  s.fixed_tolerance = mesh_options.fixed_tolerance_m > 0.0;
 
   // The resident table: every instance of a parametric cluster, relative to its cluster's anchor.
   const auto instances = view.instances();
@@ -201,7 +150,7 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
       continue;  // the view rejects such packages; never read past the table
     const glm::dvec3 anchor = clusterAnchor(c);
     for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
-      table[i] = gpuInstance(instances[i], anchor);
+      table[i] = gpuInstance(instances[i], view.profilePoints(), anchor);
   }
   s.instance_bytes = table.size() * sizeof(gpu::GpuInstance);
   glCreateBuffers(1, &s.instance_buffer);
@@ -241,6 +190,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   const auto records = s.view->clusters();
   for (auto& list : s.by_type) list.clear();
   s.mesh_clusters.clear();
+  s.instance_clusters.clear();
   for (uint32_t c : clusters) {
     if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric) ||
         records[c].instance_count == 0 || records[c].instance_first >= s.view->instances().size())
@@ -248,6 +198,9 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     const uint32_t type = s.view->instances()[records[c].instance_first].type;
     if (mode == ParametricMode::Impostor && type < kImpostorTypes)
       s.by_type[type].push_back(c);
+    else if (mode == ParametricMode::Tessellated && !s.fixed_tolerance &&
+             ParametricInstanceMeshes::handles(type))
+      s.instance_clusters.push_back(c);
     else
       s.mesh_clusters.push_back(c);
   }
@@ -339,6 +292,26 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     glUseProgram(0);
   }
 
+  if (!s.instance_clusters.empty()) {
+    InstanceLodView lod_view;
+    lod_view.eye = view.eye;
+    lod_view.view_projection = view_projection;
+    lod_view.pixel_scale = view.pixel_scale;
+    lod_view.near_m = view.near_m;
+    lod_view.tolerance_px = view.tolerance_px;
+    lod_view.min_feature_px = view.min_feature_px;
+    const InstanceLodStats lod_stats = s.instance_meshes->draw(
+        s.instance_clusters, lod_view, r.objectColorCount(), s.profile_instances);
+    stats.clusters_drawn += static_cast<uint32_t>(s.instance_clusters.size());
+    stats.instances_drawn += lod_stats.instances_drawn;
+    stats.mesh_triangles += lod_stats.triangles_drawn;
+    const ParametricMeshStats profile_stats = s.meshes->drawInstances(
+        s.profile_instances, view.eye, view_projection, view.pixel_scale, view.tolerance_px,
+        r.objectColorCount(), frame);
+    stats.instances_drawn += profile_stats.instances_drawn;
+    stats.mesh_triangles += profile_stats.triangles_drawn;
+    stats.meshes_built += profile_stats.meshes_built;
+  }
   if (!s.mesh_clusters.empty()) {
     glDisable(GL_CULL_FACE);
     const ParametricMeshStats mesh_stats =

@@ -1,4 +1,5 @@
-// Draws the parametric clusters of a cut: cylinders, cones/frustums, spheres and torus segments
+// Draws the parametric clusters of a cut (tessellated mode: parametric_instance_meshes.h, one
+// level of detail per instance): cylinders, cones/frustums, spheres and torus segments
 // as ray-cast impostors, boxes as rasterized boxes, extrusions and revolutions as run-time
 // meshes (docs/parametrics.md).
 //
@@ -51,11 +52,16 @@ struct ParametricView {
   // Tubes and spheres thinner than this radius on screen are drawn this thick (a line of about
   // one pixel rather than broken dots); 0 draws them at their true size.
   double thin_radius_px = 0.5;
+  // Tessellated mode: chordal error allowed on screen for cylinders, cones, spheres, torus
+  // segments (each instance at its own distance; the frame loop passes tau).
+  double tolerance_px = 1.0;
 };
 
 struct ParametricDrawStats {
   uint32_t clusters_drawn = 0;
-  uint64_t instances_drawn = 0;      // submitted (before per-instance small-feature culling)
+  // Impostors: submitted (before per-instance small-feature culling in the shader); tessellated
+  // mode: drawn (after per-instance frustum and small-feature culling).
+  uint64_t instances_drawn = 0;
   uint32_t impostor_calls = 0;       // multi-draws issued
   uint64_t mesh_triangles = 0;       // tessellated clusters (extrusion, revolution, or all)
   uint32_t meshes_built = 0;

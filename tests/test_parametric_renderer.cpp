@@ -83,14 +83,14 @@ struct Frame {
 // meshes are compared at full resolution, not at a LOD whose error is a fraction of a pixel).
 Frame render(const fs::path& package, const Camera& camera, ParametricMode mode,
              OcclusionMode occlusion = OcclusionMode::Off, Walkthrough** keep = nullptr,
-             bool reference = false) {
+             bool reference = false, double tau_px = 0.25) {
   WalkthroughOptions options;
   options.reference = reference;
   options.width = kWidth;
   options.height = kHeight;
   options.occlusion = occlusion;
   options.prefetch = false;
-  options.tau_px = 0.25;
+  options.tau_px = tau_px;
   options.parametrics = mode;
   static std::unique_ptr<Walkthrough> kept;
   kept.reset();
@@ -251,11 +251,12 @@ TEST_F(ParametricRendering, EachTypeMatchesAFineTessellation) {
 // its inside wall around and nothing through the middle.
 TEST_F(ParametricRendering, CapsOnlyWhenCapped) {
   const Camera camera = lookingAt({0.001, 0.0, 5.0}, {0.0, 0.0, 0.0});
+  for (ParametricMode mode : {ParametricMode::Impostor, ParametricMode::Tessellated})
   for (bool capped : {true, false}) {
-    SCOPED_TRACE(capped ? "capped" : "open");
+    SCOPED_TRACE(std::string(parametricModeName(mode)) + (capped ? " capped" : " open"));
     const fs::path cyl = buildPackage(capped ? "cap_cyl" : "open_cyl",
                                       {{1, Cylinder{0.5f, 1.0f, capped}, placed({0, 0, 0})}}, false);
-    const Frame f = render(cyl, camera, ParametricMode::Impostor);
+    const Frame f = render(cyl, camera, mode);
     const glm::ivec2 centre = pixelOf(camera, {0, 0, 1});
     EXPECT_EQ(idAt(f, centre), capped ? 1u : 0u);
     // Inside the rim, a quarter radius in: the cap, or the inner wall further down.
@@ -264,13 +265,16 @@ TEST_F(ParametricRendering, CapsOnlyWhenCapped) {
     if (capped) {
       // Cap depth: the plane z = 1 at distance 4 from the eye; reversed Z ~ near / distance.
       EXPECT_NEAR(depthAt(f, centre), 0.05 / 4.0, 0.05 / 4.0 * 0.01);
+    } else if (mode == ParametricMode::Tessellated) {
+      // The inside wall seen through the open end: its back faces are not culled from here.
+      EXPECT_LT(depthAt(f, inner), 0.05 / 4.0 * 0.999);
     } else {
       EXPECT_LT(depthAt(f, inner), 0.05 / 4.0 * 0.99);  // deeper than the top plane
     }
     const fs::path cone = buildPackage(capped ? "cap_cone" : "open_cone",
                                        {{1, Cone{0.3f, 0.6f, 1.0f, capped}, placed({0, 0, 0})}},
                                        false);
-    const Frame g = render(cone, camera, ParametricMode::Impostor);
+    const Frame g = render(cone, camera, mode);
     EXPECT_EQ(idAt(g, centre), capped ? 1u : 0u);
   }
 }
@@ -281,18 +285,21 @@ TEST_F(ParametricRendering, TorusSweepEnds) {
   const fs::path pkg = buildPackage(
       "elbow", {{1, TorusSegment{1.0f, 0.2f, float(std::numbers::pi / 2)}, placed({0, 0, 0})}},
       false);
-  const Frame f = render(pkg, camera, ParametricMode::Impostor);
-  auto onRing = [&](double deg) {
-    const double a = glm::radians(deg);
-    return idAt(f, pixelOf(camera, {std::cos(a), std::sin(a), 0.2}));
-  };
-  EXPECT_EQ(onRing(5), 1u);
-  EXPECT_EQ(onRing(45), 1u);
-  EXPECT_EQ(onRing(85), 1u);
-  EXPECT_EQ(onRing(-10), 0u);
-  EXPECT_EQ(onRing(100), 0u);
-  EXPECT_EQ(onRing(180), 0u);
-  EXPECT_EQ(onRing(270), 0u);
+  for (ParametricMode mode : {ParametricMode::Impostor, ParametricMode::Tessellated}) {
+    SCOPED_TRACE(parametricModeName(mode));
+    const Frame f = render(pkg, camera, mode);
+    auto onRing = [&](double deg) {
+      const double a = glm::radians(deg);
+      return idAt(f, pixelOf(camera, {std::cos(a), std::sin(a), 0.2}));
+    };
+    EXPECT_EQ(onRing(5), 1u);
+    EXPECT_EQ(onRing(45), 1u);
+    EXPECT_EQ(onRing(85), 1u);
+    EXPECT_EQ(onRing(-10), 0u);
+    EXPECT_EQ(onRing(100), 0u);
+    EXPECT_EQ(onRing(180), 0u);
+    EXPECT_EQ(onRing(270), 0u);
+  }
 }
 
 // Five objects of five types side by side: the id under each one's centre is that object.
@@ -423,6 +430,103 @@ TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
   // Half a pixel of chordal error at about 9 m is up to 2.7 cm: depth agrees to about 1 cm.
   EXPECT_LT(g.depthQuantile(0.5), 3e-3);
   EXPECT_GT(g.depthShare(), 0.8);
+}
+
+// Tessellated mode, each type on its own against the same primitive tessellated at 0.1 mm: the
+// per-instance meshes (unit meshes shaped by the instance's parameters, at a quarter pixel of
+// chordal error here) cover the same pixels with the same ids, at nearly the same depth.
+TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
+  const Camera camera = lookingAt({3.2, -2.4, 2.2}, {0.0, 0.0, 0.7});
+  for (const TypeCase& c : typeCases()) {
+    SCOPED_TRACE(c.name);
+    const std::vector<Part> parts = {{1, c.primitive, c.transform}};
+    const Frame tessellated = render(buildPackage(std::string("imp_") + c.name, parts, false),
+                                     camera, ParametricMode::Tessellated);
+    const Frame mesh = render(buildPackage(std::string("mesh_") + c.name, parts, true), camera,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_EQ(tessellated.stats.parametric_instances_drawn, 1u);
+    EXPECT_GT(tessellated.stats.parametric_triangles, 10u);
+    Agreement g = compare(tessellated, mesh, 2e-3);
+    EXPECT_GT(g.covered, 1000u);
+    EXPECT_LT(g.mismatchShare(), 0.02) << g.mismatched << " of " << g.covered;
+    // A quarter pixel at about 4.5 m is about 7 mm, 1.5e-3 of the distance: the facets lie
+    // within it of the surface.
+    EXPECT_LT(g.depthQuantile(0.5), 2e-3);
+    EXPECT_LT(g.depthQuantile(0.95), 5e-3) << g.depth_close << " of " << g.both;
+  }
+}
+
+// Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
+// drawn with fewer segments, so the pair costs far less than twice the near one alone (a
+// per-cluster resolution would draw both at the near one's).
+TEST_F(ParametricRendering, TessellatedResolutionFollowsEachInstance) {
+  const Part near_pipe{1, Cylinder{0.3f, 2.0f, true}, placed({0, 0, 0})};
+  const Part far_pipe{2, Cylinder{0.3f, 2.0f, true}, placed({3, 10, 0})};
+  const Camera camera = lookingAt({0.0, -1.5, 1.0}, {1.5, 10.0, 1.0});
+  const Frame near_only = render(buildPackage("lod_near", {near_pipe}, false), camera,
+                                 ParametricMode::Tessellated);
+  const Frame both = render(buildPackage("lod_both", {near_pipe, far_pipe}, false), camera,
+                            ParametricMode::Tessellated);
+  EXPECT_EQ(both.stats.parametric_clusters_drawn, 1u);
+  EXPECT_EQ(both.stats.parametric_instances_drawn, 2u);
+  EXPECT_GT(near_only.stats.parametric_triangles, 100u);
+  EXPECT_GT(both.stats.parametric_triangles, near_only.stats.parametric_triangles);
+  EXPECT_LT(double(both.stats.parametric_triangles), 1.3 * near_only.stats.parametric_triangles);
+  // The far pipe is there all the same.
+  EXPECT_EQ(idAt(both, pixelOf(camera, {3.0, 10.0, 1.0})), 2u);
+}
+
+// A pipe far thinner than a pixel (2 cm across, 60 m away: 0.06 px) is a continuous one-pixel
+// line in tessellated mode, and costs no triangles.
+TEST_F(ParametricRendering, ThinPipeIsAContinuousLine) {
+  const fs::path pkg =
+      buildPackage("thin", {{1, Cylinder{0.01f, 20.0f, false}, placed({-10, 60, 0}, {0, 90, 0})}}, false);
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 60.0, 0.0});
+  const glm::ivec2 a = pixelOf(camera, {-8.0, 60.0, 0.0}), b = pixelOf(camera, {8.0, 60.0, 0.0});
+  ASSERT_GT(b.x - a.x, 40);
+  {
+    const Frame f = render(pkg, camera, ParametricMode::Tessellated);
+    int columns_hit = 0;
+    for (int x = a.x; x <= b.x; ++x) {
+      bool hit = false;
+      for (int dy = -1; dy <= 1; ++dy) hit = hit || idAt(f, {x, a.y + dy}) == 1u;
+      columns_hit += hit;
+    }
+    EXPECT_GE(columns_hit, (b.x - a.x + 1) * 95 / 100)
+        << f.stats.parametric_instances_drawn << " instances, " << f.stats.parametric_triangles
+        << " triangles, " << f.stats.parametric_clusters_drawn << " clusters";
+    EXPECT_EQ(f.stats.parametric_triangles, 0u);
+  }
+}
+
+// An I-beam (an extrusion) close by is drawn from its profile; at a distance where the profile's
+// recesses are below a pixel it is its box (12 triangles), covering the same pixels but for a
+// thin band.
+TEST_F(ParametricRendering, FarExtrusionIsItsBox) {
+  const std::vector<glm::vec2> beam = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f},
+                                       {0.005f, -0.14f},  {0.005f, 0.14f},  {0.075f, 0.14f},
+                                       {0.075f, 0.15f},   {-0.075f, 0.15f}, {-0.075f, 0.14f},
+                                       {-0.005f, 0.14f},  {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+  const fs::path pkg = buildPackage("beam", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, false);
+  const fs::path fine = buildPackage("beam_mesh", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, true);
+  // Seen from the side at about 10 m.
+  Camera far_camera = lookingAt({10.0, -2.0, 3.0}, {0.0, 0.0, 3.0});
+  const double metres_per_px = 10.2 / far_camera.pixelScale(kHeight);
+  ASSERT_GT(0.075, metres_per_px) << "the recess must be visible as a pixel or more";
+  const Frame near_frame = render(pkg, lookingAt({1.5, -0.8, 3.0}, {0.0, 0.0, 3.0}),
+                                  ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
+  EXPECT_GT(near_frame.stats.parametric_triangles, 12u);
+  // 0.075 m (half the flange width, the most the box can stray from the profile) is within
+  // tau = 3 px at the beam's nearest possible point (its bounding sphere, 3.2 m nearer): the box.
+  ASSERT_LT(0.075, 3.0 * metres_per_px * (10.2 - 3.2) / 10.2);
+  const Frame far_frame = render(pkg, far_camera, ParametricMode::Tessellated, OcclusionMode::Off,
+                                 nullptr, false, 3.0);
+  EXPECT_EQ(far_frame.stats.parametric_triangles, 12u);
+  const Frame reference = render(fine, far_camera, ParametricMode::Impostor, OcclusionMode::Off,
+                                 nullptr, true);
+  const Agreement g = compare(far_frame, reference, 1e-2);
+  EXPECT_GT(g.covered, 50u);
+  EXPECT_LT(g.mismatchShare(), 0.35) << g.mismatched << " of " << g.covered;
 }
 
 // The generated plant: most of it is parametric. Impostors show it; hzb with parametrics in pass

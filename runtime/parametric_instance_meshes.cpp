@@ -1,0 +1,598 @@
+// Per-instance level of detail for tessellated parametrics: unit meshes made on first use, each
+// visible instance expanded from one into a per-frame batch, a few draws per frame. See
+// parametric_instance_meshes.h.
+#include "parametric_instance_meshes.h"
+
+#define GL_GLEXT_PROTOTYPES 1
+#include <GL/glcorearb.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include "gl_program.h"
+#include "parametric_meshes.h"
+#include "parametric_shaders.h"
+#include "tessellate.h"
+
+namespace tw {
+namespace {
+
+constexpr double kTwoPi = 2.0 * std::numbers::pi;
+constexpr uint32_t kTypes = 7;  // cylinder, cone, sphere, torus segment, box, extrusion, revolution
+
+// Segment counts a unit mesh may have: steps of at most 1.25x, up to kMaxArcSegments.
+constexpr std::array<uint32_t, 28> kLevels = {1,   2,   3,   4,   5,   6,   8,   10,  12,  16,
+                                              20,  24,  32,  40,  48,  64,  80,  96,  128, 160,
+                                              192, 256, 320, 384, 512, 640, 768, 1024};
+static_assert(kLevels.back() == kMaxArcSegments);
+
+uint32_t levelIndex(uint32_t segments) {
+  const auto it = std::lower_bound(kLevels.begin(), kLevels.end(), segments);
+  return it == kLevels.end() ? uint32_t(kLevels.size() - 1) : uint32_t(it - kLevels.begin());
+}
+
+// The unit meshes. Surfaces are triangles; thin instances degrade to lines along their axis
+// (Axis: n segments of the tube's axis or the torus's centre circle; BoxAxis: the box's axis a)
+// and instances thin in every direction to a point.
+// Profile: an extrusion's or a revolution's surface, drawn from its cluster's mesh
+// (ParametricMeshes::drawInstances), not here.
+enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile };
+
+Shape surfaceOf(uint32_t type) {
+  switch (static_cast<pkg::PrimitiveType>(type)) {
+    case pkg::PrimitiveType::Sphere: return Shape::Sphere;
+    case pkg::PrimitiveType::TorusSegment: return Shape::Torus;
+    case pkg::PrimitiveType::Box: return Shape::Box;
+    case pkg::PrimitiveType::Extrusion:
+    case pkg::PrimitiveType::Revolution: return Shape::Profile;
+    default: return Shape::Tube;
+  }
+}
+
+// The per-frame batches: triangles by back-face culling, lines, points.
+enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kLines, kPoints, kBatchCount };
+
+constexpr uint8_t kValid = 1, kCapped = 2, kMirrored = 4;
+constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills its box: a box
+
+// What the per-frame choice reads of an instance, prepared once.
+struct InstanceBounds {
+  glm::vec3 centre{0.0f};  // bounding-sphere centre, relative to the cluster's anchor
+  float radius = 0.0f;     // bounding-sphere radius, metres
+  // By type, in metres: tube (largest radius, height, -), sphere (radius, -, -), torus (major + minor
+  // radius, minor radius, sweep in radians), box, extrusion, revolution (the half extents of the
+  // canonical box along its axes).
+  std::array<float, 3> size{};
+  glm::vec3 origin{0.0f};  // the canonical frame's origin, relative to the anchor
+  glm::vec3 axis{0.0f};    // tubes: from the base centre (origin) to the top centre
+  uint8_t type = 0;
+  uint8_t flags = 0;       // kValid, kCapped, kMirrored
+};
+
+// An open tube's inside can only be seen through its end discs, so from an eye between the two
+// end planes and outside the tube its back faces are hidden by its front faces. `eye` is
+// relative to the anchor.
+bool tubeInsideHidden(const InstanceBounds& b, const glm::vec3& eye, float margin) {
+  const glm::vec3 to_eye = eye - b.origin;
+  const float length2 = glm::dot(b.axis, b.axis);
+  if (!(length2 > 0.0f)) return false;
+  const float t = glm::dot(to_eye, b.axis) / length2;
+  if (t < 0.0f || t > 1.0f) return false;
+  return glm::length(to_eye - t * b.axis) > b.size[0] + margin;
+}
+
+InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2> profile_points,
+                        const glm::dvec3& anchor) {
+  InstanceBounds b;
+  glm::vec3 lo, hi;
+  if (!ParametricInstanceMeshes::handles(in.type) || !instanceLocalBox(in, profile_points, lo, hi)) return b;
+  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::vec3 scale(glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2]));
+  const float largest = std::max({scale.x, scale.y, scale.z});
+  // Chordal error scales with the largest stretch of the circle's plane (all axes for spheres).
+  const float cross = std::max(scale.x, scale.y);
+  const glm::dvec3 origin(in.origin[0], in.origin[1], in.origin[2]);
+  b.centre = glm::vec3(origin - anchor) + linear * (0.5f * (lo + hi));
+  b.radius = glm::dot(scale, 0.5f * (hi - lo));  // conservative for any linear map
+  const float* p = in.params;
+  switch (static_cast<pkg::PrimitiveType>(in.type)) {
+    case pkg::PrimitiveType::Cylinder: b.size = {p[0] * cross, p[1] * scale.z, 0.0f}; break;
+    case pkg::PrimitiveType::Cone: b.size = {std::max(p[0], p[1]) * cross, p[2] * scale.z, 0.0f}; break;
+    case pkg::PrimitiveType::Sphere: b.size = {p[0] * largest, 0.0f, 0.0f}; break;
+    case pkg::PrimitiveType::TorusSegment: b.size = {(p[0] + p[1]) * cross, p[1] * largest, p[2]}; break;
+    case pkg::PrimitiveType::Box: b.size = {p[0] * scale.x, p[1] * scale.y, p[2] * scale.z}; break;
+    default: {  // extrusion, revolution: their box
+      const glm::vec3 half = 0.5f * (hi - lo) * scale;
+      b.size = {half.x, half.y, half.z};
+      break;
+    }
+  }
+  const bool finite = std::isfinite(b.radius) && std::isfinite(b.centre.x) &&
+                      std::isfinite(b.centre.y) && std::isfinite(b.centre.z);
+  b.origin = glm::vec3(origin - anchor);
+  if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Cylinder) ||
+      in.type == static_cast<uint32_t>(pkg::PrimitiveType::Cone))
+    b.axis = linear[2] * b.size[1] / std::max(scale.z, 1e-30f);
+  b.type = static_cast<uint8_t>(in.type);
+  b.flags = (finite ? kValid : 0) | ((in.flags & pkg::kInstanceCapped) ? kCapped : 0) |
+            (glm::determinant(linear) < 0.0f ? kMirrored : 0);
+  if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Extrusion)) {
+    // Shoelace area against the box's: equal (to float rounding) for a rectangle.
+    const auto profile = profile_points.subspan(in.profile_first, in.profile_count);
+    double area2 = 0.0;
+    for (size_t j = 0; j < profile.size(); ++j) {
+      const glm::dvec2 a = profile[j], c = profile[(j + 1) % profile.size()];
+      area2 += a.x * c.y - c.x * a.y;
+    }
+    const double box_area = double(hi.x - lo.x) * double(hi.y - lo.y);
+    if (std::abs(0.5 * std::abs(area2) - box_area) <= 1e-5 * box_area) b.flags |= kRectangleProfile;
+  }
+  return b;
+}
+
+// A unit mesh in the builder's arrays: its vertices start at base_vertex, its indices (relative to
+// base_vertex) at first_index; the first side_indices are the surface without end caps.
+struct UnitMesh {
+  uint32_t base_vertex = 0, vertex_count = 0, first_index = 0, side_indices = 0, all_indices = 0;
+};
+
+// Builds the unit meshes: points of a shape (shapedPoint gives them the instance's parameters).
+// Rows and columns follow formats/primitive_tessellation.cpp, and every triangle is
+// counter-clockwise seen from outside.
+//   tube (cylinder, cone): (cos a, sin a, z in [0, 1], 1 on the rim, 0 at a cap centre)
+//   sphere:                (cos a, sin a, cos latitude, sin latitude)
+//   torus:                 (fraction of the sweep, cos b, sin b, -) with b around the tube
+//   box:                   (+-1, +-1, +-1, -)
+// In the box frame (thin forms, extrusions as boxes) xyz in [-1, 1] spans the instance's
+// canonical box.
+class UnitMeshBuilder {
+ public:
+  std::vector<glm::vec4> shapes;
+  std::vector<uint32_t> indices;
+
+  UnitMesh tube(uint32_t n) {
+    UnitMesh m = begin();
+    const std::vector<glm::vec2> ring = circle(n);
+    for (float z : {0.0f, 1.0f})
+      for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, z, 1.0f});
+    shapes.push_back({0.0f, 0.0f, 0.0f, 0.0f});  // bottom cap centre
+    shapes.push_back({0.0f, 0.0f, 1.0f, 0.0f});  // top cap centre
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t i1 = (i + 1) % n;
+      quad(i, i1, n + i1, n + i);
+    }
+    m.side_indices = count(m);
+    for (uint32_t i = 0; i < n; ++i) {
+      const uint32_t i1 = (i + 1) % n;
+      triangle(2 * n, i1, i);
+      triangle(2 * n + 1, n + i, n + i1);
+    }
+    m.all_indices = count(m);
+    return m;
+  }
+
+  // n columns around, m rows pole to pole.
+  UnitMesh sphere(uint32_t n, uint32_t m) {
+    UnitMesh mesh = begin();
+    const std::vector<glm::vec2> ring = circle(n);
+    shapes.push_back({1.0f, 0.0f, 0.0f, -1.0f});  // south pole
+    for (uint32_t j = 1; j < m; ++j) {
+      const double phi = -0.5 * std::numbers::pi + std::numbers::pi * j / m;
+      const float c = static_cast<float>(std::cos(phi)), s = static_cast<float>(std::sin(phi));
+      for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, c, s});
+    }
+    const uint32_t north = 1 + (m - 1) * n;
+    shapes.push_back({1.0f, 0.0f, 0.0f, 1.0f});
+    auto at = [n](uint32_t row, uint32_t i) { return 1 + (row - 1) * n + i % n; };
+    for (uint32_t i = 0; i < n; ++i) {
+      triangle(0, at(1, i + 1), at(1, i));
+      for (uint32_t row = 1; row + 1 < m; ++row) quad(at(row, i), at(row, i + 1), at(row + 1, i + 1), at(row + 1, i));
+      triangle(at(m - 1, i), at(m - 1, i + 1), north);
+    }
+    mesh.side_indices = mesh.all_indices = count(mesh);
+    return mesh;
+  }
+
+  // nu steps along the sweep (nu + 1 columns), nv rows around the tube.
+  UnitMesh torus(uint32_t nu, uint32_t nv) {
+    UnitMesh m = begin();
+    const std::vector<glm::vec2> ring = circle(nv);
+    for (const glm::vec2& cs : ring)
+      for (uint32_t i = 0; i <= nu; ++i) shapes.push_back({float(i) / float(nu), cs.x, cs.y, 0.0f});
+    auto at = [nu](uint32_t row, uint32_t i) { return row * (nu + 1) + i; };
+    for (uint32_t k = 0; k < nv; ++k) {
+      const uint32_t k1 = (k + 1) % nv;
+      for (uint32_t i = 0; i < nu; ++i) quad(at(k, i), at(k, i + 1), at(k1, i + 1), at(k1, i));
+    }
+    m.side_indices = m.all_indices = count(m);
+    return m;
+  }
+
+  UnitMesh box() {
+    UnitMesh m = begin();
+    for (uint32_t c = 0; c < 8; ++c)
+      shapes.push_back({(c & 1) ? 1.0f : -1.0f, (c & 2) ? 1.0f : -1.0f, (c & 4) ? 1.0f : -1.0f, 0.0f});
+    // Corners by bit (0: x, 1: y, 2: z), two triangles per face: -X, +X, -Y, +Y, -Z, +Z.
+    constexpr uint32_t kCorners[36] = {0, 6, 2, 0, 4, 6, 1, 7, 5, 1, 3, 7, 0, 5, 4, 0, 1, 5,
+                                       2, 7, 3, 2, 6, 7, 0, 3, 1, 0, 2, 3, 4, 7, 6, 4, 5, 7};
+    for (uint32_t i = 0; i < 36; i += 3) triangle(kCorners[i], kCorners[i + 1], kCorners[i + 2]);
+    m.side_indices = m.all_indices = count(m);
+    return m;
+  }
+
+  // n segments from t = 0 to 1, as line pairs: shape (t, 0, t, 0) is the torus's centre-circle
+  // point at sweep fraction t (shapedPoint).
+  UnitMesh axis(uint32_t n) {
+    UnitMesh m = begin();
+    for (uint32_t i = 0; i <= n; ++i) shapes.push_back({float(i) / float(n), 0.0f, float(i) / float(n), 0.0f});
+    for (uint32_t i = 0; i < n; ++i) indices.insert(indices.end(), {i, i + 1});
+    m.side_indices = m.all_indices = count(m);
+    return m;
+  }
+
+  // The segment through the centre of the instance's canonical box along its axis `k` (0, 1, 2),
+  // drawn in the box frame: a tube's axis, a beam's centre line.
+  UnitMesh boxAxis(uint32_t k) {
+    UnitMesh m = begin();
+    glm::vec4 end(0.0f);
+    end[int(k % 3)] = 1.0f;
+    shapes.push_back(-end);
+    shapes.push_back(end);
+    indices.insert(indices.end(), {0u, 1u});
+    m.side_indices = m.all_indices = count(m);
+    return m;
+  }
+
+  // The centre of the instance's canonical box (drawn in the box frame).
+  UnitMesh point() {
+    UnitMesh m = begin();
+    shapes.push_back(glm::vec4(0.0f));
+    indices.push_back(0);
+    m.side_indices = m.all_indices = count(m);
+    return m;
+  }
+
+ private:
+  UnitMesh begin() const {
+    UnitMesh m;
+    m.base_vertex = static_cast<uint32_t>(shapes.size());
+    m.first_index = static_cast<uint32_t>(indices.size());
+    return m;
+  }
+  uint32_t count(const UnitMesh& m) const { return static_cast<uint32_t>(indices.size()) - m.first_index; }
+  void triangle(uint32_t a, uint32_t b, uint32_t c) { indices.insert(indices.end(), {a, b, c}); }
+  void quad(uint32_t a, uint32_t b, uint32_t c, uint32_t d) {
+    triangle(a, b, c);
+    triangle(a, c, d);
+  }
+  static std::vector<glm::vec2> circle(uint32_t n) {
+    std::vector<glm::vec2> ring(n);
+    for (uint32_t i = 0; i < n; ++i) {
+      const double a = kTwoPi * i / n;
+      ring[i] = {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a))};
+    }
+    return ring;
+  }
+};
+
+// How one visible instance is drawn: its unit mesh (shape and level indices, or a box axis), end
+// caps, and the batch (back-face culling, mirroring; lines; points).
+struct Form {
+  Shape shape = Shape::Tube;
+  uint32_t a = 0, b = 0;
+  bool capped = false;
+  bool box_frame = false;  // shape points span the canonical box (not the primitive's formula)
+  Batch batch = kTwoSided;
+};
+
+// The form of one visible instance: each arc's chordal error within `tolerance` metres; thinner
+// than `thin` metres across, a line or a point. `eye_outside`: the eye is outside the bounding
+// sphere; `inside_hidden`: an open tube's inside cannot be seen (tubeInsideHidden).
+Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_outside,
+                bool inside_hidden) {
+  Form f;
+  f.capped = (b.flags & kCapped) != 0;
+  bool closed = true;
+  switch (surfaceOf(b.type)) {
+    case Shape::Tube:
+      if (2.0f * b.size[0] < thin) {
+        f.shape = b.size[1] < thin ? Shape::Point : Shape::BoxAxis;
+        f.a = 2;  // the axis
+        break;
+      }
+      f.shape = Shape::Tube;
+      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), tolerance));
+      closed = f.capped || inside_hidden;
+      break;
+    case Shape::Sphere:
+      if (2.0f * b.size[0] < thin) {
+        f.shape = Shape::Point;
+        break;
+      }
+      f.shape = Shape::Sphere;
+      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), tolerance));
+      f.b = levelIndex(std::max(2u, arcSegments(b.size[0], float(std::numbers::pi), tolerance)));
+      break;
+    case Shape::Torus: {
+      f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), tolerance));
+      if (2.0f * b.size[1] < thin) {
+        f.shape = Shape::Axis;
+        break;
+      }
+      f.shape = Shape::Torus;
+      f.b = levelIndex(arcSegments(b.size[1], float(kTwoPi), tolerance));
+      closed = false;
+      break;
+    }
+    default: {  // box and profiles: thin in two directions, a line along the third; in all three, a point
+      int thin_axes = 0, longest = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        thin_axes += 2.0f * b.size[axis] < thin;
+        if (b.size[axis] > b.size[longest]) longest = axis;
+      }
+      f.shape = thin_axes == 3 ? Shape::Point : thin_axes == 2 ? Shape::BoxAxis : surfaceOf(b.type);
+      if (f.shape == Shape::BoxAxis) f.a = uint32_t(longest);
+      // An extrusion is drawn as its box when the profile lies within `tolerance` of the box's
+      // sides (at most half its smaller width away), or is the box.
+      if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Extrusion) &&
+          ((b.flags & kRectangleProfile) || std::min(b.size[0], b.size[1]) <= tolerance)) {
+        f.shape = Shape::Box;
+        f.box_frame = true;
+      }
+      break;
+    }
+  }
+  if (f.shape == Shape::BoxAxis || f.shape == Shape::Point) f.box_frame = true;
+  if (f.shape != Shape::Tube) f.capped = false;
+  if (f.shape == Shape::Axis || f.shape == Shape::BoxAxis)
+    f.batch = kLines;
+  else if (f.shape == Shape::Point)
+    f.batch = kPoints;
+  else if (closed && eye_outside)  // back faces of closed surfaces, unless the eye may be inside
+    f.batch = (b.flags & kMirrored) ? kCullCw : kCullCcw;
+  return f;
+}
+
+// A unit-mesh point `q` of a primitive with parameters `p`, in its canonical frame (scene.h).
+glm::vec3 shapedPoint(pkg::PrimitiveType type, const float* p, const glm::vec4& q) {
+  switch (type) {
+    case pkg::PrimitiveType::Cylinder: return {q.w * p[0] * q.x, q.w * p[0] * q.y, q.z * p[1]};
+    case pkg::PrimitiveType::Cone: {
+      const float r = q.w * (p[0] + (p[1] - p[0]) * q.z);
+      return {r * q.x, r * q.y, q.z * p[2]};
+    }
+    case pkg::PrimitiveType::Sphere: return p[0] * glm::vec3(q.z * q.x, q.z * q.y, q.w);
+    case pkg::PrimitiveType::TorusSegment: {
+      const float a = q.x * p[2], rho = p[0] + p[1] * q.y;
+      return {rho * std::cos(a), rho * std::sin(a), p[1] * q.z};
+    }
+    case pkg::PrimitiveType::Box: return glm::vec3(q) * glm::vec3(p[0], p[1], p[2]);
+    default: return glm::vec3(0.0f);  // profiles are drawn in the box frame only
+  }
+}
+
+uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
+
+}  // namespace
+
+struct ParametricInstanceMeshes::Impl {
+  const PackageView* view = nullptr;
+  std::vector<InstanceBounds> bounds;  // by instance index
+  GLuint program = 0, vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
+  UnitMeshBuilder builder;
+  std::unordered_map<uint32_t, UnitMesh> unit_meshes;
+  // Per-frame batches.
+  std::vector<ParametricVertex> vertices;
+  std::array<std::vector<uint32_t>, kBatchCount> indices;
+  std::vector<uint32_t> all_indices;
+
+  ~Impl() {
+    glDeleteProgram(program);
+    glDeleteBuffers(1, &vertex_buffer);
+    glDeleteBuffers(1, &index_buffer);
+    glDeleteVertexArrays(1, &vertex_array);
+  }
+
+  const UnitMesh& unitMesh(Shape shape, uint32_t a, uint32_t b) {
+    const uint32_t key = meshKey(shape, a, b);
+    if (auto it = unit_meshes.find(key); it != unit_meshes.end()) return it->second;
+    UnitMesh m;
+    switch (shape) {
+      case Shape::Tube: m = builder.tube(kLevels[a]); break;
+      case Shape::Sphere: m = builder.sphere(kLevels[a], kLevels[b]); break;
+      case Shape::Torus: m = builder.torus(kLevels[a], kLevels[b]); break;
+      case Shape::Box: m = builder.box(); break;
+      case Shape::Axis: m = builder.axis(kLevels[a]); break;
+      case Shape::BoxAxis: m = builder.boxAxis(a); break;
+      case Shape::Point: m = builder.point(); break;
+      case Shape::Profile: break;  // never expanded here
+    }
+    m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
+    return unit_meshes.emplace(key, m).first->second;
+  }
+
+  // Appends instance `i` in form `f` to its batch, positions relative to the eye.
+  void expand(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, const Form& f) {
+    const pkg::InstanceRecord& in = view->instances()[i];
+    const UnitMesh& mesh = unitMesh(f.shape, f.a, f.b);
+    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+    const uint32_t base = static_cast<uint32_t>(vertices.size());
+    const uint32_t vertex_count = mesh.vertex_count;
+    if (f.box_frame) {
+      glm::vec3 lo, hi;
+      if (!instanceLocalBox(in, view->profilePoints(), lo, hi)) return;
+      const glm::vec3 centre = anchor_eye + b.centre, half = 0.5f * (hi - lo);
+      const glm::mat3 half_axes(linear[0] * half.x, linear[1] * half.y, linear[2] * half.z);
+      for (uint32_t v = 0; v < vertex_count; ++v)
+        vertices.push_back({centre + half_axes * glm::vec3(builder.shapes[mesh.base_vertex + v]), in.object});
+    } else {
+      const glm::vec3 origin = anchor_eye + b.origin;
+      const auto type = static_cast<pkg::PrimitiveType>(in.type);
+      for (uint32_t v = 0; v < vertex_count; ++v)
+        vertices.push_back(
+            {origin + linear * shapedPoint(type, in.params, builder.shapes[mesh.base_vertex + v]), in.object});
+    }
+    const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
+    std::vector<uint32_t>& out = indices[f.batch];
+    for (uint32_t k = 0; k < count; ++k) out.push_back(base + builder.indices[mesh.first_index + k]);
+  }
+};
+
+uint32_t ParametricInstanceMeshes::roundedSegments(uint32_t segments) {
+  return kLevels[levelIndex(segments)];
+}
+
+bool ParametricInstanceMeshes::handles(uint32_t type) { return type < kTypes; }
+
+ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
+    : impl_(std::make_unique<Impl>()) {
+  Impl& s = *impl_;
+  s.view = &view;
+  const auto instances = view.instances();
+  s.bounds.resize(instances.size());
+  for (const pkg::ClusterRecord& c : view.clusters()) {
+    if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
+    if (c.instance_first > instances.size() || c.instance_count > instances.size() - c.instance_first)
+      continue;  // the view rejects such packages; never read past the table
+    const glm::dvec3 anchor = clusterAnchor(c);
+    for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
+      s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
+  }
+  while (glGetError() != GL_NO_ERROR) {
+  }
+  s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricMeshVertexShader()},
+                              {GL_FRAGMENT_SHADER, gl::parametricMeshFragmentShader()}},
+                             "ParametricInstanceMeshes");
+  glCreateVertexArrays(1, &s.vertex_array);
+  glEnableVertexArrayAttrib(s.vertex_array, 0);
+  glVertexArrayAttribFormat(s.vertex_array, 0, 3, GL_FLOAT, GL_FALSE, offsetof(ParametricVertex, position));
+  glVertexArrayAttribBinding(s.vertex_array, 0, 0);
+  glEnableVertexArrayAttrib(s.vertex_array, 1);
+  glVertexArrayAttribIFormat(s.vertex_array, 1, 1, GL_UNSIGNED_INT, offsetof(ParametricVertex, object));
+  glVertexArrayAttribBinding(s.vertex_array, 1, 0);
+  glCreateBuffers(1, &s.vertex_buffer);
+  glCreateBuffers(1, &s.index_buffer);
+  glVertexArrayVertexBuffer(s.vertex_array, 0, s.vertex_buffer, 0, sizeof(ParametricVertex));
+  glVertexArrayElementBuffer(s.vertex_array, s.index_buffer);
+  if (GLenum error = glGetError(); error != GL_NO_ERROR) {
+    char message[96];
+    std::snprintf(message, sizeof message, "ParametricInstanceMeshes: set-up failed (GL error 0x%04x)",
+                  error);
+    throw std::runtime_error(message);
+  }
+}
+
+ParametricInstanceMeshes::~ParametricInstanceMeshes() = default;
+
+InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> clusters,
+                                                const InstanceLodView& view,
+                                                uint32_t object_color_count,
+                                                std::vector<ParametricMeshInstance>& profiles) {
+  Impl& s = *impl_;
+  InstanceLodStats stats;
+  profiles.clear();
+  const auto records = s.view->clusters();
+  // The frustum's side planes, eye-relative (rows of the projection: w +- x, w +- y), each
+  // scaled to a unit normal so a sphere's radius compares directly.
+  const glm::mat4& m = view.view_projection;
+  const glm::vec4 row_x(m[0][0], m[1][0], m[2][0], m[3][0]), row_y(m[0][1], m[1][1], m[2][1], m[3][1]),
+      row_w(m[0][3], m[1][3], m[2][3], m[3][3]);
+  std::array<glm::vec4, 4> planes = {row_w + row_x, row_w - row_x, row_w + row_y, row_w - row_y};
+  for (glm::vec4& plane : planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-30f);
+  const double pixel_scale = std::max(view.pixel_scale, 1e-9);
+  const double near_m = std::max(view.near_m, 1e-6);
+
+  s.vertices.clear();
+  for (auto& list : s.indices) list.clear();
+  for (uint32_t c : clusters) {
+    if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+      continue;
+    const pkg::ClusterRecord& record = records[c];
+    if (record.instance_first > s.bounds.size() || record.instance_count > s.bounds.size() - record.instance_first)
+      continue;
+    const glm::vec3 anchor_eye(clusterAnchor(record) - view.eye);
+    for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i) {
+      const InstanceBounds& b = s.bounds[i];
+      if (!(b.flags & kValid)) continue;
+      const glm::vec3 centre = anchor_eye + b.centre;
+      const float centre_distance = glm::length(centre);
+      const double distance = std::max(double(centre_distance) - b.radius, near_m);
+      const double px_per_m = pixel_scale / distance;
+      bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
+      for (const glm::vec4& plane : planes)
+        outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
+      if (outside) {
+        ++stats.instances_culled;
+        continue;
+      }
+      const float metres_per_px = static_cast<float>(1.0 / px_per_m);
+      const Form form =
+          chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
+                     static_cast<float>(view.thin_px) * metres_per_px,
+                     centre_distance > b.radius + near_m,
+                     !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, float(near_m)));
+      ++stats.instances_drawn;
+      if (form.shape == Shape::Profile) {
+        profiles.push_back({c, i, distance});
+        continue;
+      }
+      stats.thin_instances += form.batch == kLines || form.batch == kPoints;
+      s.expand(i, b, anchor_eye, form);
+    }
+  }
+  stats.instances_drawn -= profiles.size();  // counted by whoever draws them
+  if (s.vertices.empty()) return stats;
+
+  // One upload of every batch, then one draw per batch.
+  s.all_indices.clear();
+  std::array<size_t, kBatchCount + 1> first{};
+  for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
+    first[batch] = s.all_indices.size();
+    s.all_indices.insert(s.all_indices.end(), s.indices[batch].begin(), s.indices[batch].end());
+  }
+  first[kBatchCount] = s.all_indices.size();
+  glNamedBufferData(s.vertex_buffer, GLsizeiptr(s.vertices.size() * sizeof(ParametricVertex)),
+                    s.vertices.data(), GL_STREAM_DRAW);
+  glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
+                    s.all_indices.data(), GL_STREAM_DRAW);
+  glUseProgram(s.program);
+  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE, &m[0][0]);
+  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
+  const glm::vec3 at_eye(0.0f);  // positions are already eye-relative
+  glProgramUniform3fv(s.program, gl::kParamMeshAnchorLocation, 1, &at_eye[0]);
+  glBindVertexArray(s.vertex_array);
+  for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
+    const size_t count = first[batch + 1] - first[batch];
+    if (count == 0) continue;
+    if (batch == kCullCcw || batch == kCullCw) {
+      glEnable(GL_CULL_FACE);
+      glCullFace(GL_BACK);
+      glFrontFace(batch == kCullCw ? GL_CW : GL_CCW);
+    } else {
+      glDisable(GL_CULL_FACE);
+    }
+    const GLenum mode = batch == kLines ? GL_LINES : batch == kPoints ? GL_POINTS : GL_TRIANGLES;
+    glDrawElements(mode, GLsizei(count), GL_UNSIGNED_INT,
+                   reinterpret_cast<const void*>(first[batch] * sizeof(uint32_t)));
+    ++stats.draw_calls;
+    if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
+  }
+  glDisable(GL_CULL_FACE);
+  glFrontFace(GL_CCW);
+  glBindVertexArray(0);
+  glUseProgram(0);
+  stats.unit_meshes = static_cast<uint32_t>(s.unit_meshes.size());
+  return stats;
+}
+
+}  // namespace tw

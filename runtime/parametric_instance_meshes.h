@@ -1,0 +1,90 @@
+// Tessellated mode with a level of detail per instance: each visible parametric instance drawn
+// at the resolution its own distance asks for, thin ones as lines or points.
+//
+// Why: tessellating whole clusters (parametric_meshes.h) gives every instance of a cluster the
+// resolution its nearest point needs, so a 64-instance pipe run that starts at the eye is drawn at
+// close-up resolution along its whole length, and a far handrail post costs as many triangles as
+// a near one. Here each visible instance picks its own segment counts: the chordal error of its
+// arcs projects to at most tolerance_px (the frame's tau). Thin ones become one-pixel lines or
+// points (InstanceLodView::thin_px), extrusions whose profile detail is below tolerance their box.
+// Instances outside the frustum's side planes or whose bounding sphere projects below
+// min_feature_px are dropped. Closed surfaces seen from outside, and open tubes seen from
+// between their end planes, have their back faces culled.
+// How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
+// formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
+// every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex
+// batch, drawn with at most five calls. Instancing was measured first: llvmpipe runs its vertex
+// pipeline once per instance, about a microsecond each, which for 60,000 small far instances
+// cost more than their triangles (docs/parametrics.md).
+// Extrusions and revolutions that need their true surface are handed back to the caller for
+// ParametricMeshes::drawInstances.
+// Needs a current GL 4.5 context for the object's whole life.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "package_view.h"
+#include "parametric_meshes.h"
+
+namespace tw {
+
+// The camera as the per-instance choice needs it; positions in the package frame.
+struct InstanceLodView {
+  glm::dvec3 eye{0.0};
+  glm::mat4 view_projection{1.0f};  // eye-relative (as GlRenderer::viewProjection)
+  double pixel_scale = 1.0;         // Camera::pixelScale(viewport height)
+  double near_m = 0.05;
+  double tolerance_px = 1.0;        // chordal error allowed on screen
+  double min_feature_px = 1.0;      // instances whose bounding sphere projects below are dropped
+  // Tubes, elbows and spheres thinner than this on screen (at their nearest point) are drawn as
+  // one-pixel lines along their axis or as points, boxes thin in two directions as lines and in
+  // three as points: fewer vertices than the thinnest mesh, and a continuous line where a
+  // sub-pixel mesh breaks into dots.
+  double thin_px = 1.5;
+};
+
+struct InstanceLodStats {
+  uint64_t instances_drawn = 0;    // after culling
+  uint64_t instances_culled = 0;   // frustum side planes and small features
+  uint64_t triangles_drawn = 0;    // submitted (back faces included)
+  uint64_t thin_instances = 0;     // of instances_drawn: as lines or points
+  uint32_t draw_calls = 0;
+  uint32_t unit_meshes = 0;        // made so far
+};
+
+class ParametricInstanceMeshes {
+ public:
+  // Segment counts are rounded up to one of these (so a few dozen unit meshes serve a plant).
+  static uint32_t roundedSegments(uint32_t segments);
+
+  // Reads the instance table's bounds once (about 40 bytes per instance). Throws
+  // std::runtime_error when GL set-up fails.
+  explicit ParametricInstanceMeshes(const PackageView& view);
+  ~ParametricInstanceMeshes();
+  ParametricInstanceMeshes(const ParametricInstanceMeshes&) = delete;
+  ParametricInstanceMeshes& operator=(const ParametricInstanceMeshes&) = delete;
+
+  // True for the types handled here: all seven (extrusions and revolutions as lines and points,
+  // their surfaces through ParametricMeshes).
+  static bool handles(uint32_t type);
+
+  // Draws the instances of `clusters` (parametric clusters of the handled types) into the bound
+  // framebuffer with the caller's depth state, reading the instance table the caller bound at
+  // gpu::kInstanceBinding (parametric_gpu.h: origins relative to their cluster's anchor) and the
+  // object colours at gl_shaders.h kObjectColorBinding. Extrusions and revolutions that need
+  // their surface are not drawn: they are listed in `profiles` (by cluster, with their distance)
+  // for ParametricMeshes::drawInstances.
+  InstanceLodStats draw(std::span<const uint32_t> clusters, const InstanceLodView& view,
+                        uint32_t object_color_count, std::vector<ParametricMeshInstance>& profiles);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace tw
