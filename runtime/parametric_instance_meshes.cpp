@@ -44,7 +44,8 @@ uint32_t levelIndex(uint32_t segments) {
 // and instances thin in every direction to a point.
 // Profile: an extrusion's or a revolution's surface, drawn from its cluster's mesh
 // (ParametricMeshes::drawInstances), not here.
-enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile };
+// None: thinner than the smallest line worth drawing (InstanceLodView::min_thin_px).
+enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile, None };
 
 Shape surfaceOf(uint32_t type) {
   switch (static_cast<pkg::PrimitiveType>(type)) {
@@ -148,7 +149,8 @@ struct UnitMesh {
 // Builds the unit meshes: points of a shape (shapedPoint gives them the instance's parameters).
 // Rows and columns follow formats/primitive_tessellation.cpp, and every triangle is
 // counter-clockwise seen from outside.
-//   tube (cylinder, cone): (cos a, sin a, z in [0, 1], 1 on the rim, 0 at a cap centre)
+//   tube (cylinder, cone): (cos a, sin a, z in [0, 1], 1 on the side's rim, 2 on a cap's rim,
+//                          0 at a cap centre)
 //   sphere:                (cos a, sin a, cos latitude, sin latitude)
 //   torus:                 (fraction of the sweep, cos b, sin b, -) with b around the tube
 //   box:                   (+-1, +-1, +-1, -)
@@ -162,8 +164,10 @@ class UnitMeshBuilder {
   UnitMesh tube(uint32_t n) {
     UnitMesh m = begin();
     const std::vector<glm::vec2> ring = circle(n);
-    for (float z : {0.0f, 1.0f})
-      for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, z, 1.0f});
+    // Side rims, then the caps' own rims (flat normals), then the cap centres.
+    for (float rim : {1.0f, 2.0f})
+      for (float z : {0.0f, 1.0f})
+        for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, z, rim});
     shapes.push_back({0.0f, 0.0f, 0.0f, 0.0f});  // bottom cap centre
     shapes.push_back({0.0f, 0.0f, 1.0f, 0.0f});  // top cap centre
     for (uint32_t i = 0; i < n; ++i) {
@@ -173,8 +177,8 @@ class UnitMeshBuilder {
     m.side_indices = count(m);
     for (uint32_t i = 0; i < n; ++i) {
       const uint32_t i1 = (i + 1) % n;
-      triangle(2 * n, i1, i);
-      triangle(2 * n + 1, n + i, n + i1);
+      triangle(4 * n, 2 * n + i1, 2 * n + i);
+      triangle(4 * n + 1, 3 * n + i, 3 * n + i1);
     }
     m.all_indices = count(m);
     return m;
@@ -295,18 +299,21 @@ struct Form {
 };
 
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; thinner
-// than `thin` metres across, a line or a point. `eye_outside`: the eye is outside the bounding
-// sphere; `inside_hidden`: an open tube's inside cannot be seen (tubeInsideHidden).
-Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_outside,
-                bool inside_hidden) {
+// than `thin` metres across, a line or a point, or nothing when thinner than `min_thin`.
+// `eye_outside`: the eye is outside the bounding sphere; `inside_hidden`: an open tube's inside
+// cannot be seen (tubeInsideHidden).
+Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin,
+                bool eye_outside, bool inside_hidden) {
   Form f;
   f.capped = (b.flags & kCapped) != 0;
   bool closed = true;
+  float across = 0.0f;  // thin forms: the width the line or point stands for
   switch (surfaceOf(b.type)) {
     case Shape::Tube:
       if (2.0f * b.size[0] < thin) {
         f.shape = b.size[1] < thin ? Shape::Point : Shape::BoxAxis;
         f.a = 2;  // the axis
+        across = f.shape == Shape::Point ? std::max(2.0f * b.size[0], b.size[1]) : 2.0f * b.size[0];
         break;
       }
       f.shape = Shape::Tube;
@@ -316,6 +323,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_o
     case Shape::Sphere:
       if (2.0f * b.size[0] < thin) {
         f.shape = Shape::Point;
+        across = 2.0f * b.size[0];
         break;
       }
       f.shape = Shape::Sphere;
@@ -326,6 +334,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_o
       f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), tolerance));
       if (2.0f * b.size[1] < thin) {
         f.shape = Shape::Axis;
+        across = 2.0f * b.size[1];
         break;
       }
       f.shape = Shape::Torus;
@@ -340,7 +349,13 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_o
         if (b.size[axis] > b.size[longest]) longest = axis;
       }
       f.shape = thin_axes == 3 ? Shape::Point : thin_axes == 2 ? Shape::BoxAxis : surfaceOf(b.type);
-      if (f.shape == Shape::BoxAxis) f.a = uint32_t(longest);
+      if (f.shape == Shape::BoxAxis) {
+        f.a = uint32_t(longest);
+        for (int axis = 0; axis < 3; ++axis)
+          if (axis != longest) across = std::max(across, 2.0f * b.size[axis]);
+      } else if (f.shape == Shape::Point) {
+        across = 2.0f * b.size[longest];
+      }
       // An extrusion is drawn as its box when the profile lies within `tolerance` of the box's
       // sides (at most half its smaller width away), or is the box.
       if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Extrusion) &&
@@ -350,6 +365,11 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_o
       }
       break;
     }
+  }
+  if (f.shape == Shape::BoxAxis || f.shape == Shape::Point || f.shape == Shape::Axis) {
+    // A sub-pixel line covers its whole length where the true surface covers a share of the
+    // pixels about equal to its width: below min_thin, leaving it out is the nearer image.
+    if (across < min_thin) f.shape = Shape::None;
   }
   if (f.shape == Shape::BoxAxis || f.shape == Shape::Point) f.box_frame = true;
   if (f.shape != Shape::Tube) f.capped = false;
@@ -364,10 +384,11 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, bool eye_o
 
 // A unit-mesh point `q` of a primitive with parameters `p`, in its canonical frame (scene.h).
 glm::vec3 shapedPoint(pkg::PrimitiveType type, const float* p, const glm::vec4& q) {
+  const float rim = std::min(q.w, 1.0f);  // tubes: 0 at a cap centre
   switch (type) {
-    case pkg::PrimitiveType::Cylinder: return {q.w * p[0] * q.x, q.w * p[0] * q.y, q.z * p[1]};
+    case pkg::PrimitiveType::Cylinder: return {rim * p[0] * q.x, rim * p[0] * q.y, q.z * p[1]};
     case pkg::PrimitiveType::Cone: {
-      const float r = q.w * (p[0] + (p[1] - p[0]) * q.z);
+      const float r = rim * (p[0] + (p[1] - p[0]) * q.z);
       return {r * q.x, r * q.y, q.z * p[2]};
     }
     case pkg::PrimitiveType::Sphere: return p[0] * glm::vec3(q.z * q.x, q.z * q.y, q.w);
@@ -380,9 +401,41 @@ glm::vec3 shapedPoint(pkg::PrimitiveType type, const float* p, const glm::vec4& 
   }
 }
 
+// The surface normal at unit-mesh point `q` in the canonical frame (not normalized for cones);
+// zero where the surface is flat there (caps, boxes) or for lines and points.
+glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, const glm::vec4& q) {
+  switch (shape) {
+    case Shape::Tube:
+      if (q.w != 1.0f) return glm::vec3(0.0f);
+      if (type == pkg::PrimitiveType::Cone) return {p[2] * q.x, p[2] * q.y, p[0] - p[1]};
+      return {q.x, q.y, 0.0f};
+    case Shape::Sphere: return {q.z * q.x, q.z * q.y, q.w};
+    case Shape::Torus: {
+      const float a = q.x * p[2];
+      return {q.y * std::cos(a), q.y * std::sin(a), q.z};
+    }
+    default: return glm::vec3(0.0f);
+  }
+}
+
+// A unit (or zero) normal as GL_INT_2_10_10_10_REV, normalized.
+uint32_t packNormal(const glm::vec3& n) {
+  auto component = [](float v) {
+    return uint32_t(int32_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 511.0f))) & 0x3ffu;
+  };
+  return component(n.x) | (component(n.y) << 10) | (component(n.z) << 20);
+}
+
 uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
 
 }  // namespace
+
+// One vertex of the per-frame batch: 20 bytes.
+struct SmoothVertex {
+  glm::vec3 position;  // metres from the eye
+  uint32_t object;     // object index
+  uint32_t normal;     // packNormal
+};
 
 struct ParametricInstanceMeshes::Impl {
   const PackageView* view = nullptr;
@@ -391,7 +444,7 @@ struct ParametricInstanceMeshes::Impl {
   UnitMeshBuilder builder;
   std::unordered_map<uint32_t, UnitMesh> unit_meshes;
   // Per-frame batches.
-  std::vector<ParametricVertex> vertices;
+  std::vector<SmoothVertex> vertices;
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
 
@@ -414,7 +467,8 @@ struct ParametricInstanceMeshes::Impl {
       case Shape::Axis: m = builder.axis(kLevels[a]); break;
       case Shape::BoxAxis: m = builder.boxAxis(a); break;
       case Shape::Point: m = builder.point(); break;
-      case Shape::Profile: break;  // never expanded here
+      case Shape::Profile:
+      case Shape::None: break;  // never expanded
     }
     m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
     return unit_meshes.emplace(key, m).first->second;
@@ -434,13 +488,24 @@ struct ParametricInstanceMeshes::Impl {
       const glm::vec3 centre = anchor_eye + b.centre, half = 0.5f * (hi - lo);
       const glm::mat3 half_axes(linear[0] * half.x, linear[1] * half.y, linear[2] * half.z);
       for (uint32_t v = 0; v < vertex_count; ++v)
-        vertices.push_back({centre + half_axes * glm::vec3(builder.shapes[mesh.base_vertex + v]), in.object});
+        vertices.push_back(
+            {centre + half_axes * glm::vec3(builder.shapes[mesh.base_vertex + v]), in.object, 0u});
     } else {
       const glm::vec3 origin = anchor_eye + b.origin;
       const auto type = static_cast<pkg::PrimitiveType>(in.type);
-      for (uint32_t v = 0; v < vertex_count; ++v)
-        vertices.push_back(
-            {origin + linear * shapedPoint(type, in.params, builder.shapes[mesh.base_vertex + v]), in.object});
+      // Normals go through the cofactor matrix (the inverse transpose times the determinant):
+      // three cross products, and the scale is normalized away; its sign is the determinant's.
+      const float handedness = glm::determinant(linear) < 0.0f ? -1.0f : 1.0f;
+      const glm::mat3 normal_matrix(handedness * glm::cross(linear[1], linear[2]),
+                                    handedness * glm::cross(linear[2], linear[0]),
+                                    handedness * glm::cross(linear[0], linear[1]));
+      for (uint32_t v = 0; v < vertex_count; ++v) {
+        const glm::vec4& q = builder.shapes[mesh.base_vertex + v];
+        const glm::vec3 n = normal_matrix * shapedNormal(type, f.shape, in.params, q);
+        const float length = glm::length(n);
+        vertices.push_back({origin + linear * shapedPoint(type, in.params, q), in.object,
+                            packNormal(length > 1e-20f ? n / length : glm::vec3(0.0f))});
+      }
     }
     const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
     std::vector<uint32_t>& out = indices[f.batch];
@@ -470,19 +535,22 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
   }
   while (glGetError() != GL_NO_ERROR) {
   }
-  s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricMeshVertexShader()},
-                              {GL_FRAGMENT_SHADER, gl::parametricMeshFragmentShader()}},
+  s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricSmoothVertexShader()},
+                              {GL_FRAGMENT_SHADER, gl::parametricSmoothFragmentShader()}},
                              "ParametricInstanceMeshes");
   glCreateVertexArrays(1, &s.vertex_array);
   glEnableVertexArrayAttrib(s.vertex_array, 0);
-  glVertexArrayAttribFormat(s.vertex_array, 0, 3, GL_FLOAT, GL_FALSE, offsetof(ParametricVertex, position));
+  glVertexArrayAttribFormat(s.vertex_array, 0, 3, GL_FLOAT, GL_FALSE, offsetof(SmoothVertex, position));
   glVertexArrayAttribBinding(s.vertex_array, 0, 0);
   glEnableVertexArrayAttrib(s.vertex_array, 1);
-  glVertexArrayAttribIFormat(s.vertex_array, 1, 1, GL_UNSIGNED_INT, offsetof(ParametricVertex, object));
+  glVertexArrayAttribIFormat(s.vertex_array, 1, 1, GL_UNSIGNED_INT, offsetof(SmoothVertex, object));
   glVertexArrayAttribBinding(s.vertex_array, 1, 0);
+  glEnableVertexArrayAttrib(s.vertex_array, 2);
+  glVertexArrayAttribFormat(s.vertex_array, 2, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(SmoothVertex, normal));
+  glVertexArrayAttribBinding(s.vertex_array, 2, 0);
   glCreateBuffers(1, &s.vertex_buffer);
   glCreateBuffers(1, &s.index_buffer);
-  glVertexArrayVertexBuffer(s.vertex_array, 0, s.vertex_buffer, 0, sizeof(ParametricVertex));
+  glVertexArrayVertexBuffer(s.vertex_array, 0, s.vertex_buffer, 0, sizeof(SmoothVertex));
   glVertexArrayElementBuffer(s.vertex_array, s.index_buffer);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
     char message[96];
@@ -539,8 +607,13 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
       const Form form =
           chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
                      static_cast<float>(view.thin_px) * metres_per_px,
+                     static_cast<float>(view.min_thin_px) * metres_per_px,
                      centre_distance > b.radius + near_m,
                      !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, float(near_m)));
+      if (form.shape == Shape::None) {
+        ++stats.instances_culled;
+        continue;
+      }
       ++stats.instances_drawn;
       if (form.shape == Shape::Profile) {
         profiles.push_back({c, i, distance});
@@ -561,15 +634,13 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
     s.all_indices.insert(s.all_indices.end(), s.indices[batch].begin(), s.indices[batch].end());
   }
   first[kBatchCount] = s.all_indices.size();
-  glNamedBufferData(s.vertex_buffer, GLsizeiptr(s.vertices.size() * sizeof(ParametricVertex)),
+  glNamedBufferData(s.vertex_buffer, GLsizeiptr(s.vertices.size() * sizeof(SmoothVertex)),
                     s.vertices.data(), GL_STREAM_DRAW);
   glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
                     s.all_indices.data(), GL_STREAM_DRAW);
   glUseProgram(s.program);
   glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE, &m[0][0]);
   glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
-  const glm::vec3 at_eye(0.0f);  // positions are already eye-relative
-  glProgramUniform3fv(s.program, gl::kParamMeshAnchorLocation, 1, &at_eye[0]);
   glBindVertexArray(s.vertex_array);
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
     const size_t count = first[batch + 1] - first[batch];

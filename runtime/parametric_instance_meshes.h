@@ -44,13 +44,16 @@ struct InstanceLodView {
   // Tubes, elbows and spheres thinner than this on screen (at their nearest point) are drawn as
   // one-pixel lines along their axis or as points, boxes thin in two directions as lines and in
   // three as points: fewer vertices than the thinnest mesh, and a continuous line where a
-  // sub-pixel mesh breaks into dots.
-  double thin_px = 1.5;
+  // sub-pixel mesh breaks into dots. Thinner than min_thin_px they are left out: the true
+  // surface covers less than that share of the pixels along the line, so the line would add
+  // more wrong pixels than it keeps right ones (docs/parametrics.md has the measurement).
+  double thin_px = 1.0;
+  double min_thin_px = 0.4;
 };
 
 struct InstanceLodStats {
   uint64_t instances_drawn = 0;    // after culling
-  uint64_t instances_culled = 0;   // frustum side planes and small features
+  uint64_t instances_culled = 0;   // frustum side planes, small features, below min_thin_px
   uint64_t triangles_drawn = 0;    // submitted (back faces included)
   uint64_t thin_instances = 0;     // of instances_drawn: as lines or points
   uint32_t draw_calls = 0;

@@ -350,4 +350,51 @@ void main() {
 )";
 }
 
+// Tessellated parametrics drawn per instance (parametric_instance_meshes.h): eye-relative float
+// positions, one object index and one normal per vertex (signed 10-bit, normalized). Curved
+// surfaces carry their true normal, so a coarse tessellation shades like the smooth surface;
+// flat faces (caps, boxes), lines and points carry a zero normal and are faceted like the mesh
+// pass (derivative normals; a line faces the eye).
+inline std::string parametricSmoothVertexShader() {
+  return R"(#version 450 core
+layout(location = 0) in vec3 position;  // metres from the eye
+layout(location = 1) in uint object;
+layout(location = 2) in vec3 normal;    // world, unit or zero
+layout(location = 0) uniform mat4 view_projection;
+out vec3 pos_eye;
+out vec3 v_normal;
+flat out uint v_object;
+void main() {
+  pos_eye = position;
+  v_normal = normal;
+  v_object = object;
+  gl_Position = view_projection * vec4(pos_eye, 1.0);
+}
+)";
+}
+
+inline std::string parametricSmoothFragmentShader() {
+  return std::string(R"(#version 450 core
+in vec3 pos_eye;
+in vec3 v_normal;
+flat in uint v_object;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+)") + shadingGlsl() + R"(
+void main() {
+  vec3 n = v_normal;
+  float len = length(n);
+  if (len > 0.25) {
+    n /= len;
+  } else {
+    n = cross(dFdx(pos_eye), dFdy(pos_eye));
+    len = length(n);
+    n = len > 1e-30 ? n / len : normalize(-pos_eye);
+  }
+  out_color = shadeSurface(objectBaseColor(v_object), n, pos_eye);
+  out_id = v_object + 1u;
+}
+)";
+}
+
 }  // namespace tw::gl
