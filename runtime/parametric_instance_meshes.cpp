@@ -44,8 +44,9 @@ uint32_t levelIndex(uint32_t segments) {
 // and instances thin in every direction to a point.
 // Profile: an extrusion's or a revolution's surface, drawn from its cluster's mesh
 // (ParametricMeshes::drawInstances), not here.
-// None: thinner than the smallest line worth drawing (InstanceLodView::min_thin_px).
-enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile, None };
+// Lathe: a revolution swept here from its own profile (simplified to the tolerance), not from a
+// unit mesh. None: thinner than the smallest line worth drawing (InstanceLodView::min_thin_px).
+enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile, Lathe, None };
 
 Shape surfaceOf(uint32_t type) {
   switch (static_cast<pkg::PrimitiveType>(type)) {
@@ -363,6 +364,11 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         f.shape = Shape::Box;
         f.box_frame = true;
       }
+      // A revolution: half the tolerance for the angle, half for the profile (lathe()).
+      if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Revolution)) {
+        f.shape = Shape::Lathe;
+        f.a = levelIndex(arcSegments(std::max(b.size[0], b.size[1]), float(kTwoPi), 0.5f * tolerance));
+      }
       break;
     }
   }
@@ -430,6 +436,42 @@ uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) 
 
 }  // namespace
 
+// The profile polyline without the points that lie within `tolerance` of the line between their
+// kept neighbours (Ramer-Douglas-Peucker): first and last always stay; consecutive duplicates go.
+void simplifyProfile(std::span<const glm::vec2> profile, float tolerance, std::vector<glm::vec2>& kept) {
+  kept.clear();
+  const size_t n = profile.size();
+  if (n == 0) return;
+  std::vector<uint8_t> keep(n, 0);
+  keep[0] = keep[n - 1] = 1;
+  std::vector<std::pair<size_t, size_t>> spans = {{0, n - 1}};
+  while (!spans.empty()) {
+    const auto [first, last] = spans.back();
+    spans.pop_back();
+    if (last <= first + 1) continue;
+    const glm::vec2 a = profile[first], ab = profile[last] - a;
+    const float length2 = glm::dot(ab, ab);
+    size_t farthest = first;
+    float worst = -1.0f;
+    for (size_t k = first + 1; k < last; ++k) {
+      const glm::vec2 ap = profile[k] - a;
+      const float t = length2 > 0.0f ? std::clamp(glm::dot(ap, ab) / length2, 0.0f, 1.0f) : 0.0f;
+      const float distance = glm::length(ap - t * ab);
+      if (distance > worst) {
+        worst = distance;
+        farthest = k;
+      }
+    }
+    if (worst > tolerance) {
+      keep[farthest] = 1;
+      spans.push_back({first, farthest});
+      spans.push_back({farthest, last});
+    }
+  }
+  for (size_t k = 0; k < n; ++k)
+    if (keep[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
+}
+
 // One vertex of the per-frame batch: 20 bytes.
 struct SmoothVertex {
   glm::vec3 position;  // metres from the eye
@@ -445,6 +487,7 @@ struct ParametricInstanceMeshes::Impl {
   std::unordered_map<uint32_t, UnitMesh> unit_meshes;
   // Per-frame batches.
   std::vector<SmoothVertex> vertices;
+  std::vector<glm::vec2> kept, ring;  // lathe scratch
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
 
@@ -468,10 +511,66 @@ struct ParametricInstanceMeshes::Impl {
       case Shape::BoxAxis: m = builder.boxAxis(a); break;
       case Shape::Point: m = builder.point(); break;
       case Shape::Profile:
-      case Shape::None: break;  // never expanded
+      case Shape::Lathe:
+      case Shape::None: break;  // never expanded from a unit mesh
     }
     m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
     return unit_meshes.emplace(key, m).first->second;
+  }
+
+  // Appends revolution `i` swept over `segments` steps (a full turn's count; a partial sweep gets
+  // its share, at least one), its profile simplified to `profile_tolerance` metres: flat bands
+  // between the kept profile points, two-sided (no normals: faceted like the reference).
+  void lathe(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, uint32_t segments,
+             float profile_tolerance) {
+    const pkg::InstanceRecord& in = view->instances()[i];
+    const auto all_points = view->profilePoints();
+    if (in.profile_count < 2 || in.profile_first > all_points.size() ||
+        in.profile_count > all_points.size() - in.profile_first)
+      return;
+    const auto profile = all_points.subspan(in.profile_first, in.profile_count);
+    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+    const float scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
+    simplifyProfile(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
+    const float sweep = in.params[0];
+    const bool full = !(sweep < float(kTwoPi) * (1.0f - 1e-5f));
+    const uint32_t steps =
+        full ? segments
+             : std::max(1u, uint32_t(std::ceil(double(segments) * double(sweep) / kTwoPi)));
+    const uint32_t columns = full ? steps : steps + 1;
+    ring.resize(columns);
+    for (uint32_t c = 0; c < columns; ++c) {
+      const double a = (full ? kTwoPi : double(sweep)) * c / steps;
+      ring[c] = {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a))};
+    }
+    const glm::vec3 origin = anchor_eye + b.origin;
+    std::vector<uint32_t>& out = indices[kTwoSided];
+    uint32_t previous_first = 0;
+    bool previous_on_axis = false;
+    for (size_t j = 0; j < kept.size(); ++j) {
+      const glm::vec2 q = kept[j];
+      const bool on_axis = q.x == 0.0f;
+      const uint32_t first = static_cast<uint32_t>(vertices.size());
+      if (on_axis) {
+        vertices.push_back({origin + linear * glm::vec3(0.0f, 0.0f, q.y), in.object, 0u});
+      } else {
+        for (const glm::vec2& cs : ring)
+          vertices.push_back({origin + linear * glm::vec3(q.x * cs.x, q.x * cs.y, q.y), in.object, 0u});
+      }
+      if (j > 0 && !(previous_on_axis && on_axis)) {
+        for (uint32_t c = 0; c < steps; ++c) {
+          const uint32_t c1 = full ? (c + 1) % columns : c + 1;
+          const uint32_t a = previous_first + (previous_on_axis ? 0 : c);
+          const uint32_t b1 = previous_first + (previous_on_axis ? 0 : c1);
+          const uint32_t c2 = first + (on_axis ? 0 : c1), d = first + (on_axis ? 0 : c);
+          if (!previous_on_axis) out.insert(out.end(), {a, b1, c2});
+          if (!on_axis) out.insert(out.end(), {a, c2, d});
+        }
+      }
+      previous_first = first;
+      previous_on_axis = on_axis;
+    }
   }
 
   // Appends instance `i` in form `f` to its batch, positions relative to the eye.
@@ -620,6 +719,11 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
         continue;
       }
       stats.thin_instances += form.batch == kLines || form.batch == kPoints;
+      if (form.shape == Shape::Lathe) {
+        s.lathe(i, b, anchor_eye, kLevels[form.a],
+                0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
+        continue;
+      }
       s.expand(i, b, anchor_eye, form);
     }
   }
