@@ -127,13 +127,15 @@ void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats
     if (stats) stats->parametric_skipped += uint32_t(clusters.size());
     return;
   }
-  if (clusters.empty()) return;
+  // An empty second pass still draws the first pass's deferred instances.
+  if (clusters.empty() && last_parametric_view_.pass != InstancePass::Second) return;
   const ParametricDrawStats drawn =
       parametric_->draw(clusters, last_parametric_view_, options_.parametrics, frame_);
   if (stats) {
     stats->parametric_clusters_drawn += drawn.clusters_drawn;
     stats->parametric_instances_drawn += drawn.instances_drawn;
     stats->parametric_triangles += drawn.mesh_triangles;
+    stats->parametric_occluded += drawn.instances_occluded;
     stats->parametric_cpu_ms += drawn.cpu_ms;
   }
 }
@@ -262,6 +264,12 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     splitByKind(pass1_, mesh_pass_, parametric_pass_);
     appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, items_);
+    // Tessellated parametrics are also culled instance by instance, in the same two passes
+    // (parametric_instance_meshes.h, "Occlusion").
+    auto box_hidden = [this, &frame](const glm::vec3& lo, const glm::vec3& hi) {
+      return culler_->boxHidden(lo, hi, frame);
+    };
+    last_parametric_view_.pass = InstancePass::First;
     drawParametrics(parametric_pass_, &stats);
     full_order_.assign(mesh_pass_.begin(), mesh_pass_.end());
     full_order_pass1_ = mesh_pass_.size();
@@ -270,8 +278,14 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     const size_t pass1_items = items_.size();
     appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(pass1_items));
+    last_parametric_view_.pass = InstancePass::Second;
+    last_parametric_view_.box_hidden = box_hidden;
     drawParametrics(parametric_pass_, &stats);
+    last_parametric_view_.pass = InstancePass::All;
+    last_parametric_view_.box_hidden = nullptr;
     culler_->recordVisible(frame, pass1_, pass2_, stats);
+    if (options_.parametrics == ParametricMode::Tessellated)
+      parametric_->recordInstanceVisibility(box_hidden);
     stats.pass1_clusters = uint32_t(pass1_.size());
     stats.pass2_clusters = uint32_t(pass2_.size());
     splitByKind(rest_, mesh_pass_, parametric_pass_);

@@ -37,6 +37,7 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("parametric_instances_drawn", s.parametric_instances_drawn);
   visit("parametric_triangles", s.parametric_triangles);
   visit("parametric_cpu_ms", s.parametric_cpu_ms);
+  visit("parametric_occluded", s.parametric_occluded);
   visit("pages_resident", s.pages_resident);
   visit("pages_requested", s.pages_requested);
   visit("pages_loaded", s.pages_loaded);

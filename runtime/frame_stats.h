@@ -28,6 +28,9 @@ struct FrameStats {
   uint64_t parametric_instances_drawn = 0;  // submitted, before per-instance small-feature culling
   uint64_t parametric_triangles = 0;        // of run-time meshes (tessellated mode, extrusions...)
   double parametric_cpu_ms = 0.0;           // CPU time to submit them (and build new meshes)
+  // hzb, tessellated mode: instances of drawn clusters not drawn because their own box was
+  // hidden (parametric_instance_meshes.h, "Occlusion").
+  uint64_t parametric_occluded = 0;
   uint32_t pages_resident = 0;
   uint32_t pages_requested = 0;     // in the queue at the end of the frame
   uint32_t pages_loaded = 0;        // uploaded this frame

@@ -97,6 +97,7 @@ void OcclusionCuller::splitByLastVisible(const glm::dvec3& eye, std::span<const 
                                          std::vector<uint32_t>& rest, FrameStats& stats) {
   pass1.clear();
   rest.clear();
+  pyramid_current_ = false;
   cut_triangles_ = hidden_triangles_ = 0;
   for (uint32_t c : cut) cut_triangles_ += restingWeight(view_->clusters()[c]);
   if (resting_left_ > 0) {
@@ -239,6 +240,15 @@ bool OcclusionCuller::hidden(uint32_t cluster, const OcclusionFrame& frame,
   return pyramid_.occluded(footprint, hzb_options_.test_span_texels);
 }
 
+bool OcclusionCuller::boxHidden(const glm::vec3& lo, const glm::vec3& hi,
+                                const OcclusionFrame& frame) const {
+  if (!pyramid_current_) return false;
+  const ScreenFootprint footprint =
+      projectBox(lo, hi, frame.view_projection, frame.renderer->width(), frame.renderer->height());
+  if (footprint.offscreen && !footprint.visible_for_sure) return true;
+  return pyramid_.occluded(footprint, hzb_options_.test_span_texels);
+}
+
 void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint32_t> rest,
                                std::vector<uint32_t>& pass2, FrameStats& stats) {
   pass2.clear();
@@ -276,6 +286,7 @@ void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint
     }
   }
   buildAndReadBack(depth_source, width, height, stats);
+  pyramid_current_ = true;
 
   const auto test_start = Clock::now();
   for (uint32_t c : rest) {
@@ -309,6 +320,7 @@ void OcclusionCuller::recordVisible(const OcclusionFrame& frame, std::span<const
     const int width = frame.renderer->width(), height = frame.renderer->height();
     ensureGl(width, height);
     buildAndReadBack(frame.renderer->depthTexture(), width, height, stats);
+    pyramid_current_ = true;
   }
   if (last_rest) {
     resting_left_ = 0;

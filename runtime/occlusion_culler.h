@@ -164,6 +164,11 @@ class OcclusionCuller {
   // lies wholly off screen are dropped too and counted in culled_frustum.
   void cullRest(const OcclusionFrame& frame, std::span<const uint32_t> rest,
                 std::vector<uint32_t>& pass2, FrameStats& stats);
+  // Whether the eye-relative box [lo, hi] is hidden by this frame's pyramid (step 2's, or step
+  // 3's once recordVisible rebuilt it) or lies wholly off screen; false when no pyramid was
+  // built this frame (resting, or the frame before step 2). For finer tests than clusters: the
+  // parametric instances of tessellated mode.
+  bool boxHidden(const glm::vec3& lo, const glm::vec3& hi, const OcclusionFrame& frame) const;
   // hzb step 3, after P2 was drawn: next frame's P1 (see above). Adds to hzb_build_ms and
   // hzb_test_ms.
   void recordVisible(const OcclusionFrame& frame, std::span<const uint32_t> pass1,
@@ -220,6 +225,7 @@ class OcclusionCuller {
   unsigned occlusion_depth_ = 0, occlusion_fbo_ = 0;
   int gl_width_ = 0, gl_height_ = 0;
   HzbPyramid pyramid_;
+  bool pyramid_current_ = false;  // pyramid_ was built from this frame's depth
   std::vector<DrawItem> occluder_items_;
 };
 

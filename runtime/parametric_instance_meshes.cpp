@@ -73,6 +73,7 @@ struct InstanceBounds {
   // radius, minor radius, sweep in radians), box, extrusion, revolution (the half extents of the
   // canonical box along its axes).
   std::array<float, 3> size{};
+  glm::vec3 extent{0.0f};  // half sizes of the world-axis box about centre
   glm::vec3 origin{0.0f};  // the canonical frame's origin, relative to the anchor
   glm::vec3 axis{0.0f};    // tubes: from the base centre (origin) to the top centre
   uint8_t type = 0;
@@ -105,6 +106,10 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   const glm::dvec3 origin(in.origin[0], in.origin[1], in.origin[2]);
   b.centre = glm::vec3(origin - anchor) + linear * (0.5f * (lo + hi));
   b.radius = glm::dot(scale, 0.5f * (hi - lo));  // conservative for any linear map
+  const glm::vec3 half = 0.5f * (hi - lo);
+  for (int axis = 0; axis < 3; ++axis)  // |linear| times the half sizes, row by row
+    b.extent[axis] = std::abs(linear[0][axis]) * half.x + std::abs(linear[1][axis]) * half.y +
+                     std::abs(linear[2][axis]) * half.z;
   const float* p = in.params;
   switch (static_cast<pkg::PrimitiveType>(in.type)) {
     case pkg::PrimitiveType::Cylinder: b.size = {p[0] * cross, p[1] * scale.z, 0.0f}; break;
@@ -113,8 +118,8 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
     case pkg::PrimitiveType::TorusSegment: b.size = {(p[0] + p[1]) * cross, p[1] * largest, p[2]}; break;
     case pkg::PrimitiveType::Box: b.size = {p[0] * scale.x, p[1] * scale.y, p[2] * scale.z}; break;
     default: {  // extrusion, revolution: their box
-      const glm::vec3 half = 0.5f * (hi - lo) * scale;
-      b.size = {half.x, half.y, half.z};
+      const glm::vec3 world_half = half * scale;
+      b.size = {world_half.x, world_half.y, world_half.z};
       break;
     }
   }
@@ -488,6 +493,11 @@ struct ParametricInstanceMeshes::Impl {
   // Per-frame batches.
   std::vector<SmoothVertex> vertices;
   std::vector<glm::vec2> kept, ring;  // lathe scratch
+  // Occlusion: per instance, hidden by last frame's final depth; this frame's first-pass
+  // instances left for the second pass, and every instance drawn (cluster, instance).
+  std::vector<uint8_t> hidden_last;
+  std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
+  glm::dvec3 eye{0.0};  // of the frame's passes
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
 
@@ -612,6 +622,18 @@ struct ParametricInstanceMeshes::Impl {
   }
 };
 
+void ParametricInstanceMeshes::recordVisible(
+    const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
+  Impl& s = *impl_;
+  const auto records = s.view->clusters();
+  for (const auto& [c, i] : s.drawn) {
+    const InstanceBounds& b = s.bounds[i];
+    const glm::vec3 centre = glm::vec3(clusterAnchor(records[c]) - s.eye) + b.centre;
+    s.hidden_last[i] = box_hidden && box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
+  }
+  s.drawn.clear();
+}
+
 uint32_t ParametricInstanceMeshes::roundedSegments(uint32_t segments) {
   return kLevels[levelIndex(segments)];
 }
@@ -624,6 +646,7 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
   s.view = &view;
   const auto instances = view.instances();
   s.bounds.resize(instances.size());
+  s.hidden_last.assign(instances.size(), 0);
   for (const pkg::ClusterRecord& c : view.clusters()) {
     if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
     if (c.instance_first > instances.size() || c.instance_count > instances.size() - c.instance_first)
@@ -681,6 +704,61 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
 
   s.vertices.clear();
   for (auto& list : s.indices) list.clear();
+  if (view.pass == InstancePass::First) {
+    s.deferred.clear();
+    s.drawn.clear();
+  }
+  s.eye = view.eye;
+  const bool test = view.pass == InstancePass::Second && view.box_hidden;
+  // One instance of cluster `c` (anchor_eye: its anchor relative to the eye).
+  auto consider = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    const InstanceBounds& b = s.bounds[i];
+    if (!(b.flags & kValid)) return;
+    const glm::vec3 centre = anchor_eye + b.centre;
+    const float centre_distance = glm::length(centre);
+    const double distance = std::max(double(centre_distance) - b.radius, near_m);
+    const double px_per_m = pixel_scale / distance;
+    bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
+    for (const glm::vec4& plane : planes)
+      outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
+    if (outside) {
+      ++stats.instances_culled;
+      return;
+    }
+    if (view.pass == InstancePass::First && s.hidden_last[i]) {
+      s.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
+      return;
+    }
+    if (test && view.box_hidden(centre - b.extent, centre + b.extent)) {
+      s.hidden_last[i] = 1;
+      ++stats.instances_occluded;
+      return;
+    }
+    const float metres_per_px = static_cast<float>(1.0 / px_per_m);
+    const Form form =
+        chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
+                   static_cast<float>(view.thin_px) * metres_per_px,
+                   static_cast<float>(view.min_thin_px) * metres_per_px,
+                   centre_distance > b.radius + near_m,
+                   !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, float(near_m)));
+    if (form.shape == Shape::None) {
+      ++stats.instances_culled;
+      return;
+    }
+    if (view.pass != InstancePass::All) s.drawn.push_back({c, i});
+    ++stats.instances_drawn;
+    if (form.shape == Shape::Profile) {
+      profiles.push_back({c, i, distance});
+      return;
+    }
+    stats.thin_instances += form.batch == kLines || form.batch == kPoints;
+    if (form.shape == Shape::Lathe) {
+      s.lathe(i, b, anchor_eye, kLevels[form.a],
+              0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
+      return;
+    }
+    s.expand(i, b, anchor_eye, form);
+  };
   for (uint32_t c : clusters) {
     if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
       continue;
@@ -688,44 +766,12 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
     if (record.instance_first > s.bounds.size() || record.instance_count > s.bounds.size() - record.instance_first)
       continue;
     const glm::vec3 anchor_eye(clusterAnchor(record) - view.eye);
-    for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i) {
-      const InstanceBounds& b = s.bounds[i];
-      if (!(b.flags & kValid)) continue;
-      const glm::vec3 centre = anchor_eye + b.centre;
-      const float centre_distance = glm::length(centre);
-      const double distance = std::max(double(centre_distance) - b.radius, near_m);
-      const double px_per_m = pixel_scale / distance;
-      bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
-      for (const glm::vec4& plane : planes)
-        outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
-      if (outside) {
-        ++stats.instances_culled;
-        continue;
-      }
-      const float metres_per_px = static_cast<float>(1.0 / px_per_m);
-      const Form form =
-          chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
-                     static_cast<float>(view.thin_px) * metres_per_px,
-                     static_cast<float>(view.min_thin_px) * metres_per_px,
-                     centre_distance > b.radius + near_m,
-                     !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, float(near_m)));
-      if (form.shape == Shape::None) {
-        ++stats.instances_culled;
-        continue;
-      }
-      ++stats.instances_drawn;
-      if (form.shape == Shape::Profile) {
-        profiles.push_back({c, i, distance});
-        continue;
-      }
-      stats.thin_instances += form.batch == kLines || form.batch == kPoints;
-      if (form.shape == Shape::Lathe) {
-        s.lathe(i, b, anchor_eye, kLevels[form.a],
-                0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
-        continue;
-      }
-      s.expand(i, b, anchor_eye, form);
-    }
+    for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
+      consider(c, anchor_eye, i);
+  }
+  if (view.pass == InstancePass::Second) {
+    for (const auto& [c, i] : s.deferred) consider(c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+    s.deferred.clear();
   }
   stats.instances_drawn -= profiles.size();  // counted by whoever draws them
   if (s.vertices.empty()) return stats;

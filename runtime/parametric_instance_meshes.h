@@ -16,12 +16,20 @@
 // batch, drawn with at most five calls. Instancing was measured first: llvmpipe runs its vertex
 // pipeline once per instance, about a microsecond each, which for 60,000 small far instances
 // cost more than their triangles (docs/parametrics.md).
-// Extrusions and revolutions that need their true surface are handed back to the caller for
+// Extrusions that need their true surface are handed back to the caller for
 // ParametricMeshes::drawInstances.
+// Occlusion (hzb mode): instances are culled one by one, two-pass like the clusters. The first
+// pass draws the instances of its clusters that were not hidden last frame and keeps the others
+// aside; the second pass tests those and every instance of the second-pass clusters against the
+// pyramid of the first pass's depth (box_hidden), and draws the survivors; recordVisible then
+// tests every instance drawn against the frame's final depth, which decides the next first pass.
+// A 64-instance cluster visible through a doorway no longer draws its 60 instances behind the
+// wall. Conservative as the cluster test is: only depth that was drawn hides anything.
 // Needs a current GL 4.5 context for the object's whole life.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <vector>
@@ -32,6 +40,10 @@
 #include "parametric_meshes.h"
 
 namespace tw {
+
+// Which pass of an hzb frame a draw is ("Occlusion" above): All draws every visible instance
+// (modes off and pvs, references, the unculled redraw).
+enum class InstancePass { All, First, Second };
 
 // The camera as the per-instance choice needs it; positions in the package frame.
 struct InstanceLodView {
@@ -49,6 +61,9 @@ struct InstanceLodView {
   // more wrong pixels than it keeps right ones (docs/parametrics.md has the measurement).
   double thin_px = 1.0;
   double min_thin_px = 0.4;
+  InstancePass pass = InstancePass::All;
+  // Second pass: whether an eye-relative box is hidden by this frame's pyramid.
+  std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
 };
 
 struct InstanceLodStats {
@@ -56,6 +71,7 @@ struct InstanceLodStats {
   uint64_t instances_culled = 0;   // frustum side planes, small features, below min_thin_px
   uint64_t triangles_drawn = 0;    // submitted (back faces included)
   uint64_t thin_instances = 0;     // of instances_drawn: as lines or points
+  uint64_t instances_occluded = 0; // second pass: hidden by the pyramid, one by one
   uint32_t draw_calls = 0;
   uint32_t unit_meshes = 0;        // made so far
 };
@@ -84,6 +100,10 @@ class ParametricInstanceMeshes {
   // for ParametricMeshes::drawInstances.
   InstanceLodStats draw(std::span<const uint32_t> clusters, const InstanceLodView& view,
                         uint32_t object_color_count, std::vector<ParametricMeshInstance>& profiles);
+
+  // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)
+  // `box_hidden` hides, for the next frame's first pass.
+  void recordVisible(const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden);
 
  private:
   struct Impl;

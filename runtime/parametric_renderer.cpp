@@ -172,6 +172,11 @@ ParametricRenderer::~ParametricRenderer() = default;
 uint64_t ParametricRenderer::instanceBytes() const { return impl_->instance_bytes; }
 ParametricMeshes& ParametricRenderer::meshes() { return *impl_->meshes; }
 
+void ParametricRenderer::recordInstanceVisibility(
+    const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
+  impl_->instance_meshes->recordVisible(box_hidden);
+}
+
 ParametricDrawStats ParametricRenderer::draw(std::span<const uint32_t> clusters,
                                              const ParametricView& view, ParametricMode mode,
                                              uint64_t frame) {
@@ -185,7 +190,8 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   Impl& s = *impl_;
   ParametricDrawStats stats;
   mode = resolveParametricMode(mode);
-  if (mode == ParametricMode::Off || clusters.empty()) return stats;
+  if (mode == ParametricMode::Off || (clusters.empty() && view.pass != InstancePass::Second))
+    return stats;
   const auto start = Clock::now();
   const auto records = s.view->clusters();
   for (auto& list : s.by_type) list.clear();
@@ -292,7 +298,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     glUseProgram(0);
   }
 
-  if (!s.instance_clusters.empty()) {
+  if (!s.instance_clusters.empty() || (mode == ParametricMode::Tessellated && view.pass == InstancePass::Second)) {
     InstanceLodView lod_view;
     lod_view.eye = view.eye;
     lod_view.view_projection = view_projection;
@@ -300,10 +306,13 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     lod_view.near_m = view.near_m;
     lod_view.tolerance_px = view.tolerance_px;
     lod_view.min_feature_px = view.min_feature_px;
+    lod_view.pass = view.pass;
+    lod_view.box_hidden = view.box_hidden;
     const InstanceLodStats lod_stats = s.instance_meshes->draw(
         s.instance_clusters, lod_view, r.objectColorCount(), s.profile_instances);
     stats.clusters_drawn += static_cast<uint32_t>(s.instance_clusters.size());
     stats.instances_drawn += lod_stats.instances_drawn;
+    stats.instances_occluded += lod_stats.instances_occluded;
     stats.mesh_triangles += lod_stats.triangles_drawn;
     const ParametricMeshStats profile_stats = s.meshes->drawInstances(
         s.profile_instances, view.eye, view_projection, view.pixel_scale, view.tolerance_px,

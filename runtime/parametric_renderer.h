@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string_view>
@@ -26,6 +27,7 @@
 
 #include "gl_renderer.h"
 #include "package_view.h"
+#include "parametric_instance_meshes.h"
 #include "parametric_meshes.h"
 
 namespace tw {
@@ -55,6 +57,10 @@ struct ParametricView {
   // Tessellated mode: chordal error allowed on screen for cylinders, cones, spheres, torus
   // segments (each instance at its own distance; the frame loop passes tau).
   double tolerance_px = 1.0;
+  // Tessellated mode in hzb: which pass of the frame this draw is (parametric_instance_meshes.h,
+  // "Occlusion"), and the test of an eye-relative box against this frame's pyramid.
+  InstancePass pass = InstancePass::All;
+  std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
 };
 
 struct ParametricDrawStats {
@@ -64,6 +70,7 @@ struct ParametricDrawStats {
   uint64_t instances_drawn = 0;
   uint32_t impostor_calls = 0;       // multi-draws issued
   uint64_t mesh_triangles = 0;       // tessellated clusters (extrusion, revolution, or all)
+  uint64_t instances_occluded = 0;   // tessellated mode, second pass: hidden one by one
   uint32_t meshes_built = 0;
   double cpu_ms = 0.0;               // CPU time of the call (llvmpipe rasterizes later)
 };
@@ -86,6 +93,10 @@ class ParametricRenderer {
   // Same, into `framebuffer` (same size as the renderer's targets, with colour 0, ids 1, depth).
   ParametricDrawStats drawInto(unsigned framebuffer, std::span<const uint32_t> clusters,
                                const ParametricView& view, ParametricMode mode, uint64_t frame);
+
+  // Tessellated mode in hzb, after the frame's final-depth pyramid: which of the instances drawn
+  // this frame are hidden, so the next frame's first pass leaves them to its second.
+  void recordInstanceVisibility(const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden);
 
   // Bytes of the resident instance SSBO.
   uint64_t instanceBytes() const;

@@ -481,8 +481,9 @@ TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
         worst = std::max(worst, std::abs(int(coarse.rgba[4 * i + k]) - int(mesh.rgba[4 * i + k])));
       close += worst <= 8;
     }
-    if (!std::holds_alternative<Revolution>(c.primitive))  // faceted, like the reference
+    if (!std::holds_alternative<Revolution>(c.primitive)) {  // faceted, like the reference
       EXPECT_GT(double(close) / std::max<size_t>(both, 1), 0.5) << close << " of " << both;
+    }
   }
 }
 
@@ -566,6 +567,46 @@ TEST_F(ParametricRendering, FarExtrusionIsItsBox) {
   const Agreement g = compare(far_frame, reference, 1e-2);
   EXPECT_GT(g.covered, 50u);
   EXPECT_LT(g.mismatchShare(), 0.35) << g.mismatched << " of " << g.covered;
+}
+
+// hzb, tessellated mode: two spheres in one parametric cluster, one in front of a mesh wall and
+// one behind it. The cluster is visible, so only the instance test can leave the hidden sphere
+// out: it does, the image equals the unculled redraw, and when the camera rises above the wall
+// the hidden sphere shows in the very frame it becomes visible.
+TEST_F(ParametricRendering, HzbCullsHiddenInstancesOfAVisibleCluster) {
+  SceneObject wall;
+  wall.info.id = 1;
+  wall.info.name = "wall";
+  wall.info.color_rgba = 0xff808080u;
+  wall.info.transform.origin = glm::dvec3(0.0, 0.0, 1.0);
+  wall.geometry = test::subdividedBox(glm::vec3(0.1f, 4.0f, 1.0f), 4);
+  const std::vector<Part> balls = {{2, Sphere{0.5f}, placed({-2.0, 0, 1.0})},
+                                   {3, Sphere{0.5f}, placed({3.0, 0, 1.0})}};
+  const fs::path pkg = buildPackage("hidden_ball", balls, false, {wall});
+  const Camera low = lookingAt({-6.0, 0.0, 1.0}, {3.0, 0.0, 1.0});
+  Walkthrough* walk = nullptr;
+  const Frame f = render(pkg, low, ParametricMode::Tessellated, OcclusionMode::Hzb, &walk);
+  EXPECT_EQ(f.stats.parametric_clusters_drawn, 1u);
+  EXPECT_EQ(f.stats.parametric_instances_drawn, 1u);
+  EXPECT_EQ(f.stats.parametric_occluded, 1u);
+  const uint32_t near_id = idAt(f, pixelOf(low, {-2.0, 0.0, 1.0}));
+  ASSERT_GT(near_id, 0u);
+  EXPECT_EQ(walk->package().objects()[near_id - 1].id, 2u);
+  std::vector<uint32_t> unculled;
+  walk->redrawUnculled();
+  walk->renderer().readObjectIds(unculled);
+  EXPECT_EQ(unculled, f.ids);
+
+  // Over the wall: the far sphere's first frame already shows it.
+  const Camera high = lookingAt({-6.0, 0.0, 9.0}, {3.0, 0.0, 1.0});
+  const FrameStats up = walk->renderFrame(high, 1.0);
+  std::vector<uint32_t> ids;
+  walk->renderer().readObjectIds(ids);
+  const glm::ivec2 far_px = pixelOf(high, {3.0, 0.0, 1.3});
+  const uint32_t far_id = ids[size_t(far_px.y) * kWidth + size_t(far_px.x)];
+  ASSERT_GT(far_id, 0u);
+  EXPECT_EQ(walk->package().objects()[far_id - 1].id, 3u);
+  EXPECT_EQ(up.parametric_instances_drawn, 2u);
 }
 
 // The generated plant: most of it is parametric. Impostors show it; hzb with parametrics in pass
