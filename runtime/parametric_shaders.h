@@ -284,7 +284,11 @@ void main() {
   float view_depth = max(dot(v_pos_eye, view_forward_near.xyz), 1e-30);
   float s_min = (view_forward_near.w / view_depth - 1.0) * len_d;  // the near plane
   float px = v_px_scale * view_depth;  // canonical units per pixel around the proxy point
-  float min_r = thin_radius_px * px;
+  // A thin tube's grown radius reaches the pixel centres half a pixel away with 5 % to spare:
+  // px is taken at the proxy point, which lies nearer than the tube by up to about a pixel's
+  // worth of metres, so without it a pipe lying exactly between two pixel rows (every centre of
+  // both on its grown silhouette) would miss them all and vanish.
+  float min_r = thin_radius_px * px * 1.05;
   vec3 p0 = vec3(g.axis_x.w, g.axis_y.w, g.axis_z.w);
   bool capped = (g.flags & kGpuCapped) != 0u;
   float best = kNoHit;
