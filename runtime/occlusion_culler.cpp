@@ -233,8 +233,13 @@ bool OcclusionCuller::hidden(uint32_t cluster, const OcclusionFrame& frame,
     if (double(lo_f[k]) > lo[k]) lo_f[k] = std::nextafter(lo_f[k], -INFINITY);
     if (double(hi_f[k]) < hi[k]) hi_f[k] = std::nextafter(hi_f[k], INFINITY);
   }
-  const ScreenFootprint footprint = projectBox(lo_f, hi_f, frame.view_projection,
-                                               frame.renderer->width(), frame.renderer->height());
+  return testBox(lo_f, hi_f, frame, offscreen);
+}
+
+bool OcclusionCuller::testBox(const glm::vec3& lo, const glm::vec3& hi, const OcclusionFrame& frame,
+                              bool& offscreen) const {
+  const ScreenFootprint footprint =
+      projectBox(lo, hi, frame.view_projection, frame.renderer->width(), frame.renderer->height());
   offscreen = footprint.offscreen && !footprint.visible_for_sure;
   if (offscreen) return true;
   return pyramid_.occluded(footprint, hzb_options_.test_span_texels);
@@ -242,11 +247,8 @@ bool OcclusionCuller::hidden(uint32_t cluster, const OcclusionFrame& frame,
 
 bool OcclusionCuller::boxHidden(const glm::vec3& lo, const glm::vec3& hi,
                                 const OcclusionFrame& frame) const {
-  if (!pyramid_current_) return false;
-  const ScreenFootprint footprint =
-      projectBox(lo, hi, frame.view_projection, frame.renderer->width(), frame.renderer->height());
-  if (footprint.offscreen && !footprint.visible_for_sure) return true;
-  return pyramid_.occluded(footprint, hzb_options_.test_span_texels);
+  bool offscreen = false;
+  return pyramid_current_ && testBox(lo, hi, frame, offscreen);
 }
 
 void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint32_t> rest,

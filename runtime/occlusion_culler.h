@@ -199,6 +199,9 @@ class OcclusionCuller {
   void buildAndReadBack(unsigned depth_texture, int width, int height, FrameStats& stats);
   // True when the pyramid certainly hides cluster c; sets offscreen when its box is off screen.
   bool hidden(uint32_t cluster, const OcclusionFrame& frame, bool& offscreen) const;
+  // The same for an eye-relative box.
+  bool testBox(const glm::vec3& lo, const glm::vec3& hi, const OcclusionFrame& frame,
+               bool& offscreen) const;
 
   const PackageView* view_;
   HzbOptions hzb_options_;

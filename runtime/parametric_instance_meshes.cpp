@@ -439,43 +439,52 @@ uint32_t packNormal(const glm::vec3& n) {
 
 uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
 
-}  // namespace
-
 // The profile polyline without the points that lie within `tolerance` of the line between their
 // kept neighbours (Ramer-Douglas-Peucker): first and last always stay; consecutive duplicates go.
-void simplifyProfile(std::span<const glm::vec2> profile, float tolerance, std::vector<glm::vec2>& kept) {
-  kept.clear();
-  const size_t n = profile.size();
-  if (n == 0) return;
-  std::vector<uint8_t> keep(n, 0);
-  keep[0] = keep[n - 1] = 1;
-  std::vector<std::pair<size_t, size_t>> spans = {{0, n - 1}};
-  while (!spans.empty()) {
-    const auto [first, last] = spans.back();
-    spans.pop_back();
-    if (last <= first + 1) continue;
-    const glm::vec2 a = profile[first], ab = profile[last] - a;
-    const float length2 = glm::dot(ab, ab);
-    size_t farthest = first;
-    float worst = -1.0f;
-    for (size_t k = first + 1; k < last; ++k) {
-      const glm::vec2 ap = profile[k] - a;
-      const float t = length2 > 0.0f ? std::clamp(glm::dot(ap, ab) / length2, 0.0f, 1.0f) : 0.0f;
-      const float distance = glm::length(ap - t * ab);
-      if (distance > worst) {
-        worst = distance;
-        farthest = k;
+// Keeps its scratch between calls: it runs for every revolution drawn, every frame.
+class ProfileSimplifier {
+ public:
+  void simplify(std::span<const glm::vec2> profile, float tolerance, std::vector<glm::vec2>& kept) {
+    kept.clear();
+    const size_t n = profile.size();
+    if (n == 0) return;
+    keep_.assign(n, 0);
+    keep_[0] = keep_[n - 1] = 1;
+    spans_.assign(1, {0, n - 1});
+    while (!spans_.empty()) {
+      const auto [first, last] = spans_.back();
+      spans_.pop_back();
+      if (last <= first + 1) continue;
+      const glm::vec2 a = profile[first], ab = profile[last] - a;
+      const float length2 = glm::dot(ab, ab);
+      size_t farthest = first;
+      float worst = -1.0f;
+      for (size_t k = first + 1; k < last; ++k) {
+        const glm::vec2 ap = profile[k] - a;
+        const float t = length2 > 0.0f ? std::clamp(glm::dot(ap, ab) / length2, 0.0f, 1.0f) : 0.0f;
+        const float distance = glm::length(ap - t * ab);
+        if (distance > worst) {
+          worst = distance;
+          farthest = k;
+        }
+      }
+      if (worst > tolerance) {
+        keep_[farthest] = 1;
+        spans_.push_back({first, farthest});
+        spans_.push_back({farthest, last});
       }
     }
-    if (worst > tolerance) {
-      keep[farthest] = 1;
-      spans.push_back({first, farthest});
-      spans.push_back({farthest, last});
-    }
+    for (size_t k = 0; k < n; ++k)
+      if (keep_[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
   }
-  for (size_t k = 0; k < n; ++k)
-    if (keep[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
-}
+
+ private:
+  std::vector<uint8_t> keep_;
+  std::vector<std::pair<size_t, size_t>> spans_;
+};
+
+
+}  // namespace
 
 // One vertex of the per-frame batch: 20 bytes.
 struct SmoothVertex {
@@ -493,6 +502,7 @@ struct ParametricInstanceMeshes::Impl {
   // Per-frame batches.
   std::vector<SmoothVertex> vertices;
   std::vector<glm::vec2> kept, ring;  // lathe scratch
+  ProfileSimplifier simplifier;
   // Occlusion: per instance, hidden by last frame's final depth; this frame's first-pass
   // instances left for the second pass, and every instance drawn (cluster, instance).
   std::vector<uint8_t> hidden_last;
@@ -542,7 +552,7 @@ struct ParametricInstanceMeshes::Impl {
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
     const float scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
-    simplifyProfile(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
+    simplifier.simplify(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
     const float sweep = in.params[0];
     const bool full = !(sweep < float(kTwoPi) * (1.0f - 1e-5f));
     const uint32_t steps =

@@ -183,6 +183,10 @@ struct ParametricMeshes::Impl {
   uint64_t cached_bytes = 0;
   std::vector<ParametricVertex> vertices;  // build scratch
   std::vector<uint32_t> indices;
+  // drawInstances scratch: instance offsets in the cluster by bucket, the multi-draw ranges.
+  std::array<std::vector<uint32_t>, kBucketCount> by_bucket;
+  std::vector<GLsizei> counts;
+  std::vector<const void*> offsets;
 
   ~Impl() {
     for (auto& [key, mesh] : cache) release(mesh);
@@ -332,9 +336,9 @@ ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMe
   glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
   glBindVertexArray(s.vertex_array);
   const auto records = s.view->clusters();
-  std::array<std::vector<uint32_t>, kBucketCount> by_bucket;  // instance offsets in the cluster
-  std::vector<GLsizei> counts;
-  std::vector<const void*> offsets;
+  auto& by_bucket = s.by_bucket;
+  auto& counts = s.counts;
+  auto& offsets = s.offsets;
   for (size_t k = 0; k < instances.size();) {
     const uint32_t cluster = instances[k].cluster;
     size_t end = k;
