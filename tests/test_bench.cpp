@@ -51,6 +51,7 @@ TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
         const auto& m = model["paths"][path][mode];
         EXPECT_TRUE(m.contains("median_frame_ms")) << path << " " << mode;
         EXPECT_TRUE(m.contains("median_triangles")) << path << " " << mode;
+        EXPECT_TRUE(m.contains("median_all_triangles")) << path << " " << mode;
         EXPECT_TRUE(m.contains("first_frame_ms")) << path << " " << mode;
         EXPECT_FALSE(m["series"]["frame_ms"].empty()) << path << " " << mode;
         if (std::string(mode) != "reference") {
@@ -59,6 +60,8 @@ TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
       }
       EXPECT_TRUE(model["paths"][path]["lod_frustum_occlusion"].contains("occlusion_lost_share"));
     }
+    // The orbit is generated for the replay's rate: every one of its frames is rendered.
+    EXPECT_EQ(model["paths"]["orbit"]["default"]["series"]["frame_ms"].size(), 8u);
   }
   // The report names every mode, and the plots the issue lists exist (gnuplot is a dependency).
   std::ifstream in(out / "report.md");

@@ -206,6 +206,9 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
       {"median_gpu_ms", medianOf(all, [](const FrameStats& f) { return f.gpu_ms; })},
       {"median_cpu_cut_ms", medianOf(all, [](const FrameStats& f) { return f.cpu_cut_ms; })},
       {"median_triangles", medianOf(all, [](const FrameStats& f) { return f.triangles_drawn; })},
+      // Mesh clusters and run-time parametric meshes together: what the frame rasterized.
+      {"median_all_triangles",
+       medianOf(all, [](const FrameStats& f) { return f.triangles_drawn + f.parametric_triangles; })},
       {"max_triangles",
        all.empty() ? 0 : std::max_element(all.begin(), all.end(), [](auto& a, auto& b) {
                            return a.triangles_drawn < b.triangles_drawn;
