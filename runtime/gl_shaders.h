@@ -107,6 +107,13 @@ vec4 objectBaseColor(uint object) {
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
   return rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
 }
+// The face normal of the triangle under the fragment, from screen-space derivatives of its
+// eye-relative position (facing the eye where they vanish: lines, points, slivers).
+vec3 facetNormal(vec3 pos_eye) {
+  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
+  float len = length(n);
+  return len > 1e-30 ? n / len : normalize(-pos_eye);
+}
 // n: unit normal (either side), pos_eye: the shaded point relative to the eye.
 vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
   vec3 to_eye = -pos_eye;
@@ -132,10 +139,7 @@ layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
   uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
-  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
-  float len = length(n);
-  n = len > 1e-30 ? n / len : normalize(-pos_eye);
-  out_color = shadeSurface(objectBaseColor(object), n, pos_eye);
+  out_color = shadeSurface(objectBaseColor(object), facetNormal(pos_eye), pos_eye);
   out_id = object + 1u;
 }
 )";

@@ -234,6 +234,22 @@ struct ParametricMeshes::Impl {
     return &cache.emplace(meshKey(cluster, wanted), std::move(built)).first->second;
   }
 
+  // The GL state both draw calls start from, and what they do after.
+  void beginDraw(const glm::mat4& view_projection, uint32_t object_color_count) {
+    glUseProgram(program);
+    glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                              &view_projection[0][0]);
+    glProgramUniform1ui(program, gl::kObjectColorCountLocation, object_color_count);
+    glBindVertexArray(vertex_array);
+  }
+  void endDraw(uint64_t frame, ParametricMeshStats& stats) {
+    glBindVertexArray(0);
+    glUseProgram(0);
+    evict(frame);
+    stats.meshes_cached = static_cast<uint32_t>(cache.size());
+    stats.cached_bytes = cached_bytes;
+  }
+
   // Drops the least recently used meshes not used in `frame` until the cache fits its budget.
   void evict(uint64_t frame) {
     if (cached_bytes <= options.budget_bytes) return;
@@ -293,11 +309,7 @@ ParametricMeshStats ParametricMeshes::draw(std::span<const uint32_t> clusters,
   Impl& s = *impl_;
   ParametricMeshStats stats;
   const auto start = Clock::now();
-  glUseProgram(s.program);
-  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
-                            &view_projection[0][0]);
-  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
-  glBindVertexArray(s.vertex_array);
+  s.beginDraw(view_projection, object_color_count);
   for (uint32_t cluster : clusters) {
     if (cluster >= s.view->clusters().size()) continue;
     const int wanted = s.options.fixed_tolerance_m > 0.0 ? 0 : bucketFor(cluster, eye, pixel_scale, near_m);
@@ -313,11 +325,7 @@ ParametricMeshStats ParametricMeshes::draw(std::span<const uint32_t> clusters,
     stats.instances_drawn += s.view->clusters()[cluster].instance_count;
     stats.triangles_drawn += mesh->index_count / 3;
   }
-  glBindVertexArray(0);
-  glUseProgram(0);
-  s.evict(frame);
-  stats.meshes_cached = static_cast<uint32_t>(s.cache.size());
-  stats.cached_bytes = s.cached_bytes;
+  s.endDraw(frame, stats);
   return stats;
 }
 
@@ -330,11 +338,7 @@ ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMe
   ParametricMeshStats stats;
   if (instances.empty()) return stats;
   const auto start = Clock::now();
-  glUseProgram(s.program);
-  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
-                            &view_projection[0][0]);
-  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
-  glBindVertexArray(s.vertex_array);
+  s.beginDraw(view_projection, object_color_count);
   const auto records = s.view->clusters();
   auto& by_bucket = s.by_bucket;
   auto& counts = s.counts;
@@ -395,11 +399,7 @@ ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMe
     stats.clusters_drawn += drawn;
     k = end;
   }
-  glBindVertexArray(0);
-  glUseProgram(0);
-  s.evict(frame);
-  stats.meshes_cached = static_cast<uint32_t>(s.cache.size());
-  stats.cached_bytes = s.cached_bytes;
+  s.endDraw(frame, stats);
   return stats;
 }
 

@@ -345,10 +345,7 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
-  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
-  float len = length(n);
-  n = len > 1e-30 ? n / len : normalize(-pos_eye);
-  out_color = shadeSurface(objectBaseColor(v_object), n, pos_eye);
+  out_color = shadeSurface(objectBaseColor(v_object), facetNormal(pos_eye), pos_eye);
   out_id = v_object + 1u;
 }
 )";
@@ -386,15 +383,8 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
-  vec3 n = v_normal;
-  float len = length(n);
-  if (len > 0.25) {
-    n /= len;
-  } else {
-    n = cross(dFdx(pos_eye), dFdy(pos_eye));
-    len = length(n);
-    n = len > 1e-30 ? n / len : normalize(-pos_eye);
-  }
+  float len = length(v_normal);
+  vec3 n = len > 0.25 ? v_normal / len : facetNormal(pos_eye);
   out_color = shadeSurface(objectBaseColor(v_object), n, pos_eye);
   out_id = v_object + 1u;
 }

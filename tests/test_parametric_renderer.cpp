@@ -454,8 +454,8 @@ TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
   for (const TypeCase& c : cases) {
     SCOPED_TRACE(c.name);
     const std::vector<Part> parts = {{1, c.primitive, c.transform}};
-    const Frame tessellated = render(buildPackage(std::string("imp_") + c.name, parts, false),
-                                     camera, ParametricMode::Tessellated);
+    const fs::path package = buildPackage(std::string("imp_") + c.name, parts, false);
+    const Frame tessellated = render(package, camera, ParametricMode::Tessellated);
     const Frame mesh = render(buildPackage(std::string("mesh_") + c.name, parts, true), camera,
                               ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
     EXPECT_EQ(tessellated.stats.parametric_instances_drawn, 1u);
@@ -470,8 +470,8 @@ TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
     // Colour: curved surfaces carry their true normals, so even a coarse mesh (4 px of chordal
     // error) shades much like the fine one; compare per pixel where both show the object. (With
     // facet normals, as the mesh pass has, the sphere and the torus match on under 40 % here.)
-    const Frame coarse = render(buildPackage(std::string("imp_") + c.name, parts, false), camera,
-                                ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 4.0);
+    const Frame coarse = render(package, camera, ParametricMode::Tessellated, OcclusionMode::Off,
+                                nullptr, false, 4.0);
     size_t close = 0, both = 0;
     for (size_t i = 0; i < coarse.ids.size(); ++i) {
       if (coarse.ids[i] == 0 || mesh.ids[i] == 0) continue;
