@@ -214,6 +214,11 @@ class Checker {
   uint64_t groupAt(uint32_t g) const {
     return view_.section(SectionType::Groups).offset + uint64_t{g} * sizeof(GroupRecord);
   }
+  // A record of a table that may be stored compressed: its own offset, or the frame's.
+  uint64_t recordAt(SectionType type, uint64_t index, uint64_t record_bytes) const {
+    const pkg::SectionEntry& e = view_.section(type);
+    return e.stored_bytes != 0 ? e.offset : e.offset + index * record_bytes;
+  }
   uint64_t pageAt(uint32_t p) const {
     return view_.section(SectionType::PageData).offset + pages_[p].offset;
   }
@@ -245,14 +250,15 @@ class Checker {
         {0, h.header_bytes + uint64_t{h.section_count} * sizeof(pkg::SectionEntry)}};
     for (uint32_t i = 0; i < table.size(); ++i) {
       const pkg::SectionEntry& e = table[i];
-      if (e.offset > bytes.size() || e.bytes > bytes.size() - e.offset)
+      const uint64_t stored = pkg::storedBytes(e);
+      if (e.offset > bytes.size() || stored > bytes.size() - e.offset)
         return fail("checksums", "section " + str(i) + " runs past the end of the file", e.offset);
-      if (e.bytes > 0) used.push_back({e.offset, e.offset + e.bytes});
+      if (stored > 0) used.push_back({e.offset, e.offset + stored});
       // Page data: its pages are checked one by one first, so a failure names the page.
       if (i == static_cast<uint32_t>(SectionType::PageData) && !pageChecksums()) return false;
-      const uint64_t sum = packageSectionChecksum(bytes.subspan(e.offset, e.bytes));
+      const uint64_t sum = packageSectionChecksum(bytes.subspan(e.offset, stored));
       ++report_.counts.checksums;
-      done += e.bytes;
+      done += stored;
       updateProgress(progress_, done);
       if (cancelled()) return false;
       if (sum != e.checksum)
@@ -607,8 +613,7 @@ class Checker {
                       num(worst.excess) + " m outside the object's box " + vec(v3(o.aabb_min)) +
                       "-" + vec(v3(o.aabb_max)) + " (allowed: the quantization error " +
                       num(object_tol) + " m of the coarsest shift " + str(max_shift) + ")",
-                  view_.section(SectionType::Objects).offset +
-                      uint64_t{worst.object} * sizeof(pkg::ObjectRecord),
+                  recordAt(SectionType::Objects, worst.object, sizeof(pkg::ObjectRecord)),
                   worst.cluster);
     }
     report_.counts.pages = pages_.size();
@@ -633,8 +638,7 @@ class Checker {
                           vec(glm::dvec3(i_lo)) + "-" + vec(glm::dvec3(i_hi)) +
                           " is not inside the cluster box " + vec(lo) + "-" + vec(hi) +
                           " and sphere r " + num(r.radius),
-                      view_.section(SectionType::Instances).offset +
-                          uint64_t{i} * sizeof(pkg::InstanceRecord),
+                      recordAt(SectionType::Instances, i, sizeof(pkg::InstanceRecord)),
                       c);
       }
       ++report_.counts.instances;

@@ -11,6 +11,9 @@
 //       parametric instances, objects, layers, string pool, empty visibility section.
 //   1.1 (2026-11) the visibility section filled: view cells with occluder sets and sampled
 //       visible sets (visibility_section.h). 1.0 packages (empty section) stay valid.
+//   1.2 (2026-11) the instance, profile, object and string sections may be stored as one zstd
+//       frame each (SectionEntry::stored_bytes, which was reserved and 0 before). Earlier
+//       packages stay valid; a 1.1 view rejects a compressed section (its reserved field).
 #pragma once
 
 #include <bit>
@@ -25,7 +28,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 1;
+inline constexpr uint32_t kMinorVersion = 2;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -114,12 +117,20 @@ struct SectionEntry {
   uint32_t type;          // SectionType; entry i has type i for i < kSectionCount
   uint32_t record_bytes;  // sizeof the section's record, or 1 for byte sections
   uint64_t offset;        // from the file start, multiple of kSectionAlignment
-  uint64_t bytes;         // == count * record_bytes
+  uint64_t bytes;         // of the section's records: == count * record_bytes
   uint64_t count;         // records (bytes for byte sections)
-  uint64_t checksum;      // XXH3-64 (seed 0) of the section's bytes
-  uint64_t reserved;      // 0
+  uint64_t checksum;      // XXH3-64 (seed 0) of the bytes the file stores (the frame, if any)
+  // 0: the records are stored as they are, `bytes` at `offset`. Otherwise the file stores one
+  // zstd frame of stored_bytes bytes at `offset` that decompresses to exactly `bytes` (1.2; only
+  // sections for which sectionMayBeCompressed holds: the view decompresses them at open).
+  uint64_t stored_bytes;
 };
 static_assert(sizeof(SectionEntry) == 48);
+
+// Bytes a section occupies in the file.
+inline constexpr uint64_t storedBytes(const SectionEntry& e) {
+  return e.stored_bytes != 0 ? e.stored_bytes : e.bytes;
+}
 
 // Cluster kinds.
 enum class ClusterKind : uint8_t { Mesh = 0, Parametric = 1 };
@@ -295,6 +306,17 @@ inline constexpr uint32_t kSectionRecordBytes[kSectionCount] = {sizeof(ClusterRe
                                                                 1,
                                                                 1,
                                                                 1};
+
+// Sections the writer may store zstd-compressed: tables the runtime reads whole at start anyway
+// (instances, profiles, objects) or only for picking and reports (strings). Clusters, groups and
+// pages are read in place from the mapping, page data is compressed page by page, and the
+// visibility section is read cell by cell.
+inline constexpr bool sectionMayBeCompressed(uint32_t type) {
+  return type == static_cast<uint32_t>(SectionType::Instances) ||
+         type == static_cast<uint32_t>(SectionType::Profiles) ||
+         type == static_cast<uint32_t>(SectionType::Objects) ||
+         type == static_cast<uint32_t>(SectionType::Strings);
+}
 
 inline constexpr const char* kSectionNames[kSectionCount] = {
     "clusters", "groups", "pages",   "instances",  "profiles",

@@ -2,7 +2,8 @@
 //
 // The new file keeps the writer's layout rules (package_writer.cpp): header, table, then the
 // sections in table order, each at a multiple of kSectionAlignment with zero padding, page data
-// last. Every other section is copied from the original in fixed-size chunks, so rewriting a
+// last. Every other section is copied from the original as stored (compressed tables stay
+// compressed) in fixed-size chunks, so rewriting a
 // package of many GB costs one sequential copy and a few MiB of memory.
 #include "package_rewrite.h"
 
@@ -135,11 +136,12 @@ void replacePackageSection(const std::filesystem::path& package, pkg::SectionTyp
   replaced.bytes = bytes.size();
   replaced.count = bytes.size() / record_bytes;
   replaced.checksum = packageSectionChecksum(bytes);
+  replaced.stored_bytes = 0;  // written as it is
   const std::vector<uint32_t> order = fileOrder(header.section_count);
   uint64_t cursor = sizeof(PackageHeader) + table.size() * sizeof(SectionEntry);
   for (uint32_t i : order) {
     table[i].offset = alignUp(cursor, kSectionAlignment);
-    cursor = table[i].offset + table[i].bytes;
+    cursor = table[i].offset + storedBytes(table[i]);
   }
   header.file_bytes = cursor;
   // Filling a section is a compatible addition: the file is now of this writer's minor version.
@@ -159,7 +161,7 @@ void replacePackageSection(const std::filesystem::path& package, pkg::SectionTyp
       if (i == index)
         out.write(bytes.data(), bytes.size());
       else
-        out.copyFrom(in, package, old_table[i].offset, old_table[i].bytes, chunk);
+        out.copyFrom(in, package, old_table[i].offset, storedBytes(old_table[i]), chunk);
     }
     if (out.written() != header.file_bytes)
       throw std::logic_error("replacePackageSection: wrote " + std::to_string(out.written()) +

@@ -28,8 +28,11 @@ PackageSummary summarizePackage(const PackageView& view) {
   s.max_cluster_triangles = h.max_cluster_triangles;
   s.target_page_bytes = h.target_page_bytes;
   s.input_hash = h.input_hash;
-  for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
-    s.section_bytes[i] = view.section(static_cast<pkg::SectionType>(i)).bytes;
+  for (uint32_t i = 0; i < pkg::kSectionCount; ++i) {
+    const pkg::SectionEntry& e = view.section(static_cast<pkg::SectionType>(i));
+    s.section_bytes[i] = pkg::storedBytes(e);
+    s.section_raw_bytes[i] = e.bytes;
+  }
 
   // The view guarantees every level < level_count.
   s.levels.resize(h.level_count);

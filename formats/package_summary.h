@@ -49,7 +49,8 @@ struct PackageSummary {
   uint64_t clusters = 0, groups = 0;
   uint64_t pages = 0, pages_compressed = 0;
   uint64_t page_stored_bytes = 0, page_raw_bytes = 0;  // over all pages
-  std::array<uint64_t, pkg::kSectionCount> section_bytes{};
+  std::array<uint64_t, pkg::kSectionCount> section_bytes{};      // in the file
+  std::array<uint64_t, pkg::kSectionCount> section_raw_bytes{};  // of the records (decompressed)
   std::array<uint64_t, pkg::kPrimitiveTypeCount> instances_by_type{};
   uint64_t instances = 0, profile_points = 0;
   uint64_t objects = 0, objects_with_db_key = 0;

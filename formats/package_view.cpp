@@ -18,6 +18,8 @@
 #include <limits>
 #include <utility>
 
+#include "section_codec.h"
+
 namespace tw {
 namespace {
 
@@ -107,6 +109,7 @@ PackageView& PackageView::operator=(PackageView&& other) noexcept {
     visibility_ = other.visibility_;
     visibility_cells_ = std::exchange(other.visibility_cells_, VisibilityView());
     page_data_ = other.page_data_;
+    decompressed_ = std::move(other.decompressed_);
   }
   return *this;
 }
@@ -116,6 +119,15 @@ PackageView::~PackageView() { release(); }
 void PackageView::release() {
   if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
   data_ = nullptr;
+}
+
+uint64_t PackageView::offsetOf(const void* p) const {
+  const auto* byte = static_cast<const uint8_t*>(p);
+  for (size_t i = 0; i < decompressed_.size(); ++i) {
+    const std::vector<uint8_t>& d = decompressed_[i];
+    if (!d.empty() && byte >= d.data() && byte < d.data() + d.size()) return sections_[i].offset;
+  }
+  return static_cast<uint64_t>(byte - data_);
 }
 
 void PackageView::fail(uint64_t offset, const std::string& reason) const {
@@ -202,12 +214,13 @@ void PackageView::validate(Verify verify) {
     } else if (e.record_bytes == 0) {
       fail(entry_at + 4, what + ": record size is 0");
     }
-    if (e.reserved != 0) fail(entry_at + 40, what + ": reserved field is not zero");
+    if (e.stored_bytes != 0 && !sectionMayBeCompressed(i))
+      fail(entry_at + 40, what + ": stored compressed, but it must be read in place");
     if (e.offset % kSectionAlignment != 0)
       fail(entry_at + 8,
            what + ": offset " + str(e.offset) + " is not a multiple of " + str(kSectionAlignment));
-    if (e.offset < table_end || !fits(e.offset, e.bytes, size_))
-      fail(entry_at + 8, what + ": bytes [" + str(e.offset) + ", +" + str(e.bytes) +
+    if (e.offset < table_end || !fits(e.offset, storedBytes(e), size_))
+      fail(entry_at + 8, what + ": bytes [" + str(e.offset) + ", +" + str(storedBytes(e)) +
                              ") are not inside the file after the section table");
     if (e.count > e.bytes / e.record_bytes || e.count * e.record_bytes != e.bytes)
       fail(entry_at + 24, what + ": " + str(e.bytes) + " bytes do not hold " + str(e.count) +
@@ -218,32 +231,44 @@ void PackageView::validate(Verify verify) {
   {
     std::vector<uint32_t> order;
     for (uint32_t i = 0; i < h.section_count; ++i)
-      if (sections_[i].bytes > 0) order.push_back(i);
+      if (storedBytes(sections_[i]) > 0) order.push_back(i);
     std::sort(order.begin(), order.end(),
               [&](uint32_t a, uint32_t b) { return sections_[a].offset < sections_[b].offset; });
     for (size_t k = 1; k < order.size(); ++k) {
       const SectionEntry& prev = sections_[order[k - 1]];
       const SectionEntry& cur = sections_[order[k]];
-      if (cur.offset < prev.offset + prev.bytes)
+      if (cur.offset < prev.offset + storedBytes(prev))
         fail(cur.offset, "section " + str(order[k]) + " overlaps section " + str(order[k - 1]));
     }
   }
-  auto bytesOf = [&](SectionType type) {
-    const SectionEntry& e = sections_[static_cast<uint32_t>(type)];
-    return std::span<const uint8_t>(data_ + e.offset, e.bytes);
+  auto storedOf = [&](uint32_t i) {
+    return std::span<const uint8_t>(data_ + sections_[i].offset, storedBytes(sections_[i]));
   };
   for (uint32_t i = 0; i < h.section_count; ++i) {
     if (i == static_cast<uint32_t>(SectionType::PageData) && verify != Verify::All) continue;
     if (i >= kSectionCount && verify != Verify::All) continue;
     const SectionEntry& e = sections_[i];
-    if (packageSectionChecksum({data_ + e.offset, e.bytes}) != e.checksum)
+    if (packageSectionChecksum(storedOf(i)) != e.checksum)
       fail(e.offset, (i < kSectionCount ? std::string(kSectionNames[i]) : "section " + str(i)) +
                          " section checksum mismatch");
   }
+  // Compressed tables, once their frames passed the checksum.
+  decompressed_.assign(kSectionCount, {});
+  for (uint32_t i = 0; i < kSectionCount; ++i) {
+    const SectionEntry& e = sections_[i];
+    if (e.stored_bytes == 0) continue;
+    const std::string problem = decompressSection(storedOf(i), e.bytes, decompressed_[i]);
+    if (!problem.empty()) fail(e.offset, std::string(kSectionNames[i]) + " section " + problem);
+  }
+  auto bytesOf = [&](SectionType type) {
+    const uint32_t i = static_cast<uint32_t>(type);
+    if (sections_[i].stored_bytes != 0) return std::span<const uint8_t>(decompressed_[i]);
+    return std::span<const uint8_t>(data_ + sections_[i].offset, sections_[i].bytes);
+  };
 
   auto records = [&]<typename T>(SectionType type, std::span<const T>& out) {
     const SectionEntry& e = sections_[static_cast<uint32_t>(type)];
-    out = std::span<const T>(reinterpret_cast<const T*>(data_ + e.offset), e.count);
+    out = std::span<const T>(reinterpret_cast<const T*>(bytesOf(type).data()), e.count);
   };
   records(SectionType::Clusters, clusters_);
   records(SectionType::Groups, groups_);
@@ -417,7 +442,7 @@ void PackageView::verifyAll() {
   std::vector<std::pair<uint64_t, uint64_t>> used{
       {0, sizeof(PackageHeader) + sections_.size() * sizeof(SectionEntry)}};
   for (const SectionEntry& e : sections_)
-    if (e.bytes > 0) used.push_back({e.offset, e.offset + e.bytes});
+    if (storedBytes(e) > 0) used.push_back({e.offset, e.offset + storedBytes(e)});
   std::sort(used.begin(), used.end());
   uint64_t cursor = 0;
   used.push_back({size_, size_});

@@ -99,9 +99,9 @@ class PackageView {
   void verifyAll();
   void validateVisibility();
   [[noreturn]] void fail(uint64_t offset, const std::string& reason) const;
-  uint64_t offsetOf(const void* p) const {
-    return static_cast<uint64_t>(static_cast<const uint8_t*>(p) - data_);
-  }
+  // File offset of a byte of a record: inside the mapping, its own offset; inside a section
+  // decompressed at open, the offset of that section's frame (the file has no finer address).
+  uint64_t offsetOf(const void* p) const;
   void release();
 
   std::string name_;
@@ -120,6 +120,9 @@ class PackageView {
   std::span<const uint8_t> visibility_;
   VisibilityView visibility_cells_;  // spans into the mapping, which a move does not relocate
   std::span<const uint8_t> page_data_;
+  // Sections stored compressed (format 1.2), decompressed at open; empty for the others. The
+  // spans above point into these, and a move keeps the vectors' buffers where they are.
+  std::vector<std::vector<uint8_t>> decompressed_;
 };
 
 }  // namespace tw

@@ -17,6 +17,7 @@
 
 #include "package_view.h"
 #include "record_spill.h"
+#include "section_codec.h"
 #include "tws_format.h"
 
 namespace tw {
@@ -624,6 +625,7 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
       {spill ? &spill->data() : nullptr, page_data.data(), page_data.size()},
   };
   SectionEntry table[kSectionCount] = {};
+  std::vector<uint8_t> frames[kSectionCount];  // compressed tables, written instead of records
   uint64_t cursor = sizeof(PackageHeader) + sizeof(table);
   for (uint32_t i = 0; i < kSectionCount; ++i) {
     SectionEntry& e = table[i];
@@ -636,9 +638,23 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
     e.bytes = head_bytes + tail.size();
     e.count = e.bytes / kSectionRecordBytes[i];
     e.offset = alignUp(cursor, kSectionAlignment);
-    e.checksum = piece.head ? piece.head->checksumWith(tail) : packageSectionChecksum(tail);
-    cursor = e.offset + e.bytes;
-    stats.section_bytes[i] = e.bytes;
+    if (options.compress_tables && sectionMayBeCompressed(i) && e.bytes > 0) {
+      SectionCompressor compressor(e.bytes, options.zstd_level);
+      if (piece.head) piece.head->forEachChunk(4u << 20, [&](std::span<const uint8_t> chunk) {
+        compressor.add(chunk);
+      });
+      compressor.add(tail);
+      frames[i] = compressor.finish();
+      if (frames[i].size() >= e.bytes) frames[i] = {};  // did not shrink: stored as it is
+    }
+    if (!frames[i].empty()) {
+      e.stored_bytes = frames[i].size();
+      e.checksum = packageSectionChecksum(frames[i]);
+    } else {
+      e.checksum = piece.head ? piece.head->checksumWith(tail) : packageSectionChecksum(tail);
+    }
+    cursor = e.offset + storedBytes(e);
+    stats.section_bytes[i] = storedBytes(e);
   }
   h.file_bytes = cursor;
   h.header_checksum = packageHeaderChecksum(h, table);
@@ -649,6 +665,10 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   out.write(table, sizeof(table));
   for (uint32_t i = 0; i < kSectionCount; ++i) {
     out.padTo(table[i].offset);
+    if (!frames[i].empty()) {
+      out.write(frames[i].data(), frames[i].size());
+      continue;
+    }
     const Piece& piece = pieces[i];
     if (piece.head) out.copyFrom(*piece.head);
     out.write(piece.tail, piece.tail_count * kSectionRecordBytes[i]);

@@ -47,6 +47,10 @@ void setClusterLod(pkg::ClusterRecord& record, const ClusterLod& lod,
 struct PackageWriteOptions {
   bool zstd = true;  // compress pages; a page that does not shrink is stored raw
   int zstd_level = 9;
+  // Store the instance, profile, object and string tables as one zstd frame each (format 1.2,
+  // section_codec.h) when that shrinks them; false writes them as they are, as 1.1 did. The
+  // frames are built in memory before the file is written: about a tenth of those tables' size.
+  bool compress_tables = true;
 };
 
 class PageSpill;   // package_writer.cpp: finished pages, compressed, in a file

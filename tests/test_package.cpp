@@ -157,8 +157,8 @@ struct Bytes {
   }
   void fixSectionChecksum(SectionType t) {
     pkg::SectionEntry e = entry(t);
-    e.checksum = packageSectionChecksum(
-        {reinterpret_cast<const uint8_t*>(data.data()) + e.offset, static_cast<size_t>(e.bytes)});
+    e.checksum = packageSectionChecksum({reinterpret_cast<const uint8_t*>(data.data()) + e.offset,
+                                         static_cast<size_t>(pkg::storedBytes(e))});
     setEntry(t, e);
     fixHeaderChecksum();
   }
@@ -428,7 +428,10 @@ TEST(Package, MissingFileOrDirectoryIsAFormatError) {
 
 TEST(Package, SpecificErrorsNameTheOffset) {
   PackageStorage s = makeStorage();
-  const Bytes good{writeToString(s, test::scratchDir() / "good.twk")};
+  // Records patched in place: tables stored as they are (as 1.1 wrote them, still valid).
+  PackageWriteOptions plain;
+  plain.compress_tables = false;
+  const Bytes good{writeToString(s, test::scratchDir() / "good.twk", plain)};
   const pkg::SectionEntry clusters = good.entry(SectionType::Clusters);
   const pkg::SectionEntry objects = good.entry(SectionType::Objects);
 
@@ -550,6 +553,82 @@ TEST(Package, SpecificErrorsNameTheOffset) {
   b.patchRecord<uint32_t>(SectionType::Groups, 0, offsetof(pkg::GroupRecord, cluster_count), 9);
   expectRejected(b.data, "group cluster range is invalid",
                  int64_t(good.entry(SectionType::Groups).offset + 48));
+}
+
+// Format 1.2: the instance, profile, object and string tables stored as zstd frames read back
+// as the very records written plainly; a damaged frame or a wrong size is a FormatError at the
+// frame's offset, and only those four sections may be compressed.
+TEST(Package, CompressedTablesRoundTripAndRejectDamage) {
+  PackageStorage s = makeStorage();
+  // Enough instances and objects for zstd to have something to find.
+  Transform t;
+  for (int i = 0; i < 200; ++i) {
+    t.origin = s.origin + glm::dvec3(0.5 * i, 0.0, 1.0);
+    s.addInstance(Cylinder{0.05f, 3.0f, true}, t, uint32_t(i % 3));
+  }
+  s.addParametricCluster(3, 200, ClusterLod{});
+  PackageWriteOptions plain;
+  plain.compress_tables = false;
+  const auto dir = test::scratchDir();
+  const std::string packed = writeToString(s, dir / "packed.twk");
+  const std::string unpacked = writeToString(s, dir / "plain.twk", plain);
+  EXPECT_LT(packed.size(), unpacked.size());
+
+  const Bytes good{packed};
+  const pkg::SectionEntry instances = good.entry(SectionType::Instances);
+  EXPECT_GT(instances.stored_bytes, 0u);
+  EXPECT_LT(instances.stored_bytes, instances.bytes / 4) << "203 pipe records compress 4x or more";
+  EXPECT_EQ(instances.count, 203u);
+  EXPECT_EQ(good.entry(SectionType::Clusters).stored_bytes, 0u);
+  EXPECT_EQ(good.entry(SectionType::PageData).stored_bytes, 0u);
+  EXPECT_EQ(Bytes{unpacked}.entry(SectionType::Instances).stored_bytes, 0u);
+
+  PackageView a = PackageView::open(dir / "packed.twk", PackageView::Verify::All);
+  const PackageView b = PackageView::open(dir / "plain.twk", PackageView::Verify::All);
+  auto same = [](auto x, auto y) {
+    return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size_bytes()) == 0;
+  };
+  EXPECT_TRUE(same(a.instances(), b.instances()));
+  EXPECT_TRUE(same(a.objects(), b.objects()));
+  EXPECT_TRUE(same(a.profilePoints(), b.profilePoints()));
+  EXPECT_EQ(a.strings(), b.strings());
+  EXPECT_EQ(a.objectName(1), b.objectName(1));
+  // The view moves with its decompressed tables.
+  PackageView moved = std::move(a);
+  EXPECT_TRUE(same(moved.instances(), b.instances()));
+
+  // A damaged frame, its checksum made to match: zstd's own checks catch it.
+  Bytes bad = good;
+  for (uint64_t k = 8; k < instances.stored_bytes; k += 7) bad.data[instances.offset + k] ^= 0x5a;
+  bad.fixSectionChecksum(SectionType::Instances);
+  expectRejected(bad.data, "instances section ", int64_t(instances.offset));
+
+  // A table that claims more records than the frame holds.
+  bad = good;
+  pkg::SectionEntry e = instances;
+  e.count -= 1;
+  e.bytes -= sizeof(pkg::InstanceRecord);
+  bad.setEntry(SectionType::Instances, e);
+  bad.fixHeaderChecksum();
+  expectRejected(bad.data, "instances section zstd frame holds " + std::to_string(instances.bytes),
+                 int64_t(instances.offset));
+
+  // Clusters are read in place: a compressed cluster section is refused.
+  bad = good;
+  e = good.entry(SectionType::Clusters);
+  e.stored_bytes = e.bytes;
+  bad.setEntry(SectionType::Clusters, e);
+  bad.fixHeaderChecksum();
+  expectRejected(bad.data, "clusters section: stored compressed, but it must be read in place",
+                 256 + 40);
+
+  // A frame longer than the file.
+  bad = good;
+  e = instances;
+  e.stored_bytes = uint64_t(1) << 40;
+  bad.setEntry(SectionType::Instances, e);
+  bad.fixHeaderChecksum();
+  expectRejected(bad.data, "instances section: bytes", 256 + 3 * 48 + 8);
 }
 
 TEST(Package, PageDamageIsCaughtByPageChecksums) {

@@ -220,7 +220,7 @@ const fs::path& deckPackage() {
 }
 
 std::string sectionBytes(const std::string& file, const pkg::SectionEntry& entry) {
-  return file.substr(entry.offset, entry.bytes);
+  return file.substr(entry.offset, pkg::storedBytes(entry));
 }
 
 TEST(VisibilityBuild, SectionIdsAreFrontClusters) {

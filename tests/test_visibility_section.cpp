@@ -428,7 +428,7 @@ VisibilityData packageVisibility(const PackageView& view, uint32_t level) {
 }
 
 std::string sectionBytes(const std::string& file, const pkg::SectionEntry& e) {
-  return file.substr(e.offset, e.bytes);
+  return file.substr(e.offset, pkg::storedBytes(e));
 }
 
 uint32_t firstParametricCluster(const PackageView& view) {
@@ -606,7 +606,7 @@ TEST(PackageRewrite, ViewRejectsAPatchedVisibilitySectionAtItsOffset) {
       e.offset + sizeof(VisibilityHeader) + 12 * sizeof(VisibilityCellRecord);
   auto reseal = [&](std::string& b) {
     e.checksum = packageSectionChecksum(
-        {reinterpret_cast<const uint8_t*>(b.data()) + e.offset, static_cast<size_t>(e.bytes)});
+        {reinterpret_cast<const uint8_t*>(b.data()) + e.offset, static_cast<size_t>(pkg::storedBytes(e))});
     std::memcpy(b.data() + sizeof(h), table.data(), table.size() * sizeof(pkg::SectionEntry));
     h.header_checksum = packageHeaderChecksum(h, table);
     std::memcpy(b.data(), &h, sizeof(h));
@@ -658,7 +658,7 @@ TEST(PackageRewrite, ResealedDamageInTheSectionIsRejectedCleanly) {
     for (uint32_t hits = 1 + rng() % 4; hits > 0; --hits)
       b[e.offset + rng() % e.bytes] = static_cast<char>(rng() & 0xff);
     e.checksum = packageSectionChecksum(
-        {reinterpret_cast<const uint8_t*>(b.data()) + e.offset, static_cast<size_t>(e.bytes)});
+        {reinterpret_cast<const uint8_t*>(b.data()) + e.offset, static_cast<size_t>(pkg::storedBytes(e))});
     std::memcpy(b.data() + sizeof(h), table.data(), table.size() * sizeof(pkg::SectionEntry));
     h.header_checksum = packageHeaderChecksum(h, table);
     std::memcpy(b.data(), &h, sizeof(h));

@@ -156,10 +156,13 @@ nlohmann::json packageToJson(const PackageSummary& s) {
                 {"stored_bytes", s.page_stored_bytes},
                 {"raw_bytes", s.page_raw_bytes},
                 {"target_bytes", s.target_page_bytes}};
-  nlohmann::json sections;
-  for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
+  nlohmann::json sections, raw_sections;
+  for (uint32_t i = 0; i < pkg::kSectionCount; ++i) {
     sections[pkg::kSectionNames[i]] = s.section_bytes[i];
-  j["section_bytes"] = sections;
+    raw_sections[pkg::kSectionNames[i]] = s.section_raw_bytes[i];
+  }
+  j["section_bytes"] = sections;          // in the file
+  j["section_raw_bytes"] = raw_sections;  // decompressed (differs for zstd-stored tables)
   nlohmann::json prims;
   for (uint32_t t = 0; t < pkg::kPrimitiveTypeCount; ++t)
     prims[packagePrimitiveTypeName(t)] = s.instances_by_type[t];
@@ -233,7 +236,11 @@ void printPackage(const PackageSummary& s, double seconds) {
               s.target_page_bytes);
   std::printf("sections   ");
   for (uint32_t i = 0; i < pkg::kSectionCount; ++i)
-    if (s.section_bytes[i]) std::printf(" %s %llu", pkg::kSectionNames[i], ull(s.section_bytes[i]));
+    if (s.section_bytes[i]) {
+      std::printf(" %s %llu", pkg::kSectionNames[i], ull(s.section_bytes[i]));
+      if (s.section_raw_bytes[i] != s.section_bytes[i])
+        std::printf(" (zstd of %llu)", ull(s.section_raw_bytes[i]));
+    }
   std::printf("\n");
   if (s.instances) {
     std::printf("instances   %llu:", ull(s.instances));
