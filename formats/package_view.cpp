@@ -214,7 +214,7 @@ void PackageView::validate(Verify verify) {
     } else if (e.record_bytes == 0) {
       fail(entry_at + 4, what + ": record size is 0");
     }
-    if (e.stored_bytes != 0 && !sectionMayBeCompressed(i))
+    if (i < kSectionCount && e.stored_bytes != 0 && !sectionMayBeCompressed(i))
       fail(entry_at + 40, what + ": stored compressed, but it must be read in place");
     if (e.offset % kSectionAlignment != 0)
       fail(entry_at + 8,
