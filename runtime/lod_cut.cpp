@@ -97,6 +97,7 @@ LodCut::LodCut(const PackageView& view) : view_(&view) {
 
   refined_.assign(group_count, 0);
   ready_.assign(group_count, 0);
+  reach_.assign(group_count, 0);
   refined_list_.reserve(group_count);
   want_slot_.assign(view.pages().size(), 0);
 }
@@ -119,10 +120,14 @@ void LodCut::select(const CutView& view, const CutOptions& options,
   CutStats& stats = out.stats;
 
   // Refined states: 0 = produced clusters shown, 1 = refined by error (children shown),
-  // 2 = refined because nothing of it is in the frustum (its subtree is not visited).
-  constexpr uint8_t kByError = 1, kOutside = 2;
+  // 2 = refined because nothing of it is in the frustum (its subtree is not visited),
+  // 3 = looked past: it wants refining but waits for pages, so its produced clusters stay on
+  // screen while the cut goes on below it to ask for what the finer levels will want.
+  constexpr uint8_t kByError = 1, kOutside = 2, kLookedPast = 3;
+  auto hides = [&](uint32_t g) { return refined_[g] == kByError || refined_[g] == kOutside; };
   std::fill(refined_.begin(), refined_.end(), uint8_t{0});
   std::fill(ready_.begin(), ready_.end(), 0u);
+  std::fill(reach_.begin(), reach_.end(), 0u);
   refined_list_.clear();
 
   auto want = [&](uint32_t page, double priority) {
@@ -140,14 +145,18 @@ void LodCut::select(const CutView& view, const CutOptions& options,
   // 1. Groups, parents first. A group is examined only once every produced cluster it has is a
   //    root or has a refined parent (ready_ == need_), which keeps the refined set closed toward
   //    the roots and limits the work to the groups along the cut.
+  //    With look_ahead, a group blocked by missing pages, or reached only through such groups,
+  //    still passes its decision down (reach_), so the finer groups it would expose are decided
+  //    too: they draw nothing, but ask for their pages in the same frame.
   for (uint32_t g : order_) {
-    if (ready_[g] != need_[g]) continue;
-    ++stats.groups_visited;
+    if (reach_[g] != need_[g]) continue;
+    const bool shown = ready_[g] == need_[g];  // else only reached by looking past
+    if (shown) ++stats.groups_visited;
     const pkg::GroupRecord& group = groups[g];
     glm::dvec3 center = toDouble(group.lod_center);
     double radius = group.lod_radius;
     if (options.frustum_cull && !view.frustum.intersectsSphere(center, radius)) {
-      refined_[g] = kOutside;  // nothing of it shows: costs nothing and asks for no page
+      if (shown) refined_[g] = kOutside;  // nothing of it shows: costs nothing, asks for no page
       continue;
     }
     double error_px = errorPx(group.error, center, radius, view);
@@ -160,8 +169,15 @@ void LodCut::select(const CutView& view, const CutOptions& options,
         want(page, error_px);
       }
     }
-    if (!resident) {
-      ++stats.groups_blocked;  // its produced clusters (resident ancestors) stay on screen
+    if (!shown || !resident) {
+      if (shown) ++stats.groups_blocked;  // its produced clusters (resident ancestors) show
+      else ++stats.groups_looked_past;
+      if (!options.look_ahead) continue;
+      refined_[g] = kLookedPast;
+      for (uint32_t k = child_offsets_[g]; k < child_offsets_[g + 1]; ++k) {
+        uint32_t producer = child_producers_[k];
+        if (producer != kNone) ++reach_[producer];
+      }
       continue;
     }
     refined_[g] = kByError;
@@ -169,7 +185,10 @@ void LodCut::select(const CutView& view, const CutOptions& options,
     refined_list_.push_back(g);
     for (uint32_t k = child_offsets_[g]; k < child_offsets_[g + 1]; ++k) {
       uint32_t producer = child_producers_[k];
-      if (producer != kNone) ++ready_[producer];
+      if (producer != kNone) {
+        ++ready_[producer];
+        ++reach_[producer];
+      }
     }
   }
 
@@ -177,7 +196,7 @@ void LodCut::select(const CutView& view, const CutOptions& options,
   //    unless their own producing group is refined too (then finer clusters replace them).
   auto consider = [&](uint32_t index) {
     const pkg::ClusterRecord& c = clusters[index];
-    if (c.group != kNone && refined_[c.group] != 0) {
+    if (c.group != kNone && hides(c.group)) {
       // Hidden by its own group: finer clusters replace it, or nothing of it is in view.
       if (refined_[c.group] == kOutside) ++stats.culled_frustum;
       return;
@@ -210,7 +229,7 @@ void LodCut::select(const CutView& view, const CutOptions& options,
 
   for (uint32_t root : roots_) {
     const pkg::ClusterRecord& c = clusters[root];
-    if (c.group != kNone && refined_[c.group] != 0) {
+    if (c.group != kNone && hides(c.group)) {
       if (options.collect_draws) consider(root);  // counts it when culled with its group
       continue;
     }

@@ -20,6 +20,10 @@
 // the DAG: crack-free and without overlap. With every page resident it is exactly the cut of
 // error <= tau < parent_error; a group blocked only by missing pages shows its produced clusters
 // (the nearest resident ancestor) and asks for the missing pages: never a hole, never a wait.
+// Below such a blocked group the decisions go on (CutOptions::look_ahead) as if it were refined,
+// drawing nothing, so the pages of every level down to the cut the view wants are asked for in
+// the same frame, coarser ones first (their projected errors are larger): after a jump the cut
+// converges in about as many frames as the pager needs to load them, not one level a round trip.
 //
 // errorPx(e, sphere) = e * pixelScale / max(distance(eye, sphere) - radius, near_m): monotone in
 // e, and a group's sphere encloses its children's, so projected errors grow toward the roots.
@@ -51,6 +55,10 @@ struct CutOptions {
   double min_feature_px = 1.0;   // clusters whose sphere diameter projects below this are culled
   bool frustum_cull = true;
   bool collect_draws = true;     // false: only `wanted` (prefetch from a predicted camera)
+  // Ask for the pages of the whole cut at once: below a group blocked by missing pages, go on
+  // deciding as if it were refined (drawing nothing there) and ask for what the finer groups
+  // want too. Without it the cut asks one level deeper per round trip through the pager.
+  bool look_ahead = true;
 };
 
 // A page the cut would like resident; priority grows with how much it matters (the projected
@@ -64,6 +72,7 @@ struct CutStats {
   uint32_t groups_visited = 0;      // groups whose (c) held, so they were tested
   uint32_t groups_refined = 0;      // refined by error (b); groups wholly outside are not counted
   uint32_t groups_blocked = 0;      // wanted refinement, children not resident (ancestor shown)
+  uint32_t groups_looked_past = 0;  // below a blocked group, wanting refinement (look_ahead)
   uint32_t clusters_tested = 0;
   uint32_t culled_frustum = 0;      // tested outside, or hidden with a group wholly outside
   uint32_t culled_small = 0;
@@ -113,6 +122,7 @@ class LodCut {
   std::vector<uint32_t> need_;           // per group: produced clusters that have a parent group
   mutable std::vector<uint8_t> refined_;  // per group, scratch of select()
   mutable std::vector<uint32_t> ready_;   // per group: produced clusters whose parent is refined
+  mutable std::vector<uint32_t> reach_;   // the same, counting parents looked past (look_ahead)
   mutable std::vector<uint32_t> refined_list_;  // groups refined by error, this call
   mutable std::vector<uint32_t> want_slot_;     // per page: 1 + index in `wanted`, 0 = none
 };

@@ -577,51 +577,96 @@ void expectFallback(const Model& model, const CutView& view, double tau,
   }
 }
 
+// With look-ahead (the default) the drawn cut is the same as without it, and `wanted` is exactly
+// the missing child pages of every group the all-resident cut refines: the whole way down to the
+// cut the view wants, asked for at once. The pages the fallback alone asks for keep their
+// priorities (a group's projected error is at least its descendants').
+void expectLookAhead(const Model& model, const CutView& view, double tau,
+                     const std::function<bool(uint32_t)>& resident, const CutResult& without,
+                     const CutResult& with, const std::string& what) {
+  EXPECT_EQ(sorted(with.clusters), sorted(without.clusters)) << what;
+  EXPECT_EQ(with.stats.groups_blocked, without.stats.groups_blocked) << what;
+  CutResult full;
+  model.cut->select(view, everything(tau), kAllResident, full);
+  std::vector<uint8_t> refined = groupsAbove(model, full.clusters);
+  std::set<uint32_t> expected;
+  auto clusters = model.view->clusters();
+  for (uint32_t c = 0; c < clusters.size(); ++c)
+    if (clusters[c].parent_group != kNone && refined[clusters[c].parent_group] &&
+        !resident(clusters[c].page))
+      expected.insert(clusters[c].page);
+  std::map<uint32_t, float> got;
+  for (const PageWant& want : with.wanted) got[want.page] = want.priority;
+  EXPECT_EQ(got.size(), with.wanted.size()) << what << ": a page asked for twice";
+  std::set<uint32_t> got_pages;
+  for (const auto& [page, priority] : got) got_pages.insert(page);
+  EXPECT_EQ(got_pages, expected) << what;
+  for (const PageWant& want : without.wanted) {
+    auto it = got.find(want.page);
+    ASSERT_NE(it, got.end()) << what << ": page " << want.page << " no longer asked for";
+    EXPECT_NEAR(it->second, want.priority, 1e-4 * want.priority) << what;
+  }
+}
+
 TEST(LodCut, MissingPagesFallBackToResidentAncestorsAndAreRequested) {
   for (const Model* model : {&bunnyPaged(), &plantPaged(), &bunny()}) {
-    CutResult result;
+    CutResult result, ahead;
     uint32_t total_blocked = 0;
+    size_t extra_wanted = 0;
     for (uint32_t keep : {0u, 3u, 6u})
       for (const Eye& eye : kEyes)
         for (double tau : {0.5, 2.0}) {
           CutView view = cutViewOf(*model, cameraAt(*model, eye.offset_in_radii));
           auto resident = partlyResident(*model, keep, 17);
-          model->cut->select(view, everything(tau), resident, result);
+          CutOptions one_level = everything(tau);
+          one_level.look_ahead = false;
+          model->cut->select(view, one_level, resident, result);
           std::string what = std::string(eye.name) + " keep " + std::to_string(keep) + "/8 tau " +
                              std::to_string(tau);
           expectFallback(*model, view, tau, resident, result, what);
           total_blocked += result.stats.groups_blocked;
+          model->cut->select(view, everything(tau), resident, ahead);
+          expectLookAhead(*model, view, tau, resident, result, ahead, what + " look-ahead");
+          extra_wanted += ahead.wanted.size() - result.wanted.size();
         }
     EXPECT_GT(total_blocked, 10u);
+    EXPECT_GT(extra_wanted, 0u);  // looking ahead asked for more than the front's pages
   }
 }
 
-// Loading what is wanted, frame after frame, converges to the all-resident cut within the DAG's
-// depth (one level per frame at worst).
+// Loading what is wanted, frame after frame, converges to the all-resident cut: in one round
+// with look-ahead, within the DAG's depth (one level per round at worst) without it.
 TEST(LodCut, LoadingWantedPagesConvergesToTheFullCut) {
   for (const Model* model : {&bunnyPaged(), &plantPaged()}) {
-    CutView view = cutViewOf(*model, cameraAt(*model, {0.9, 0.2, 0.3}));
-    CutOptions options = everything(0.5);
-    CutResult result;
-    model->cut->select(view, options, kAllResident, result);
-    std::vector<uint32_t> full = sorted(result.clusters);
-    std::set<uint32_t> resident_pages(model->cut->rootPages().begin(),
-                                      model->cut->rootPages().end());
-    auto resident = [&](uint32_t page) { return resident_pages.count(page) > 0; };
-    uint32_t frames = 0;
-    for (; frames < 100; ++frames) {
-      model->cut->select(view, options, resident, result);
-      if (result.wanted.empty()) break;
-      for (const PageWant& want : result.wanted) resident_pages.insert(want.page);
+    for (bool look_ahead : {true, false}) {
+      CutView view = cutViewOf(*model, cameraAt(*model, {0.9, 0.2, 0.3}));
+      CutOptions options = everything(0.5);
+      options.look_ahead = look_ahead;
+      CutResult result;
+      model->cut->select(view, options, kAllResident, result);
+      std::vector<uint32_t> full = sorted(result.clusters);
+      std::set<uint32_t> resident_pages(model->cut->rootPages().begin(),
+                                        model->cut->rootPages().end());
+      auto resident = [&](uint32_t page) { return resident_pages.count(page) > 0; };
+      uint32_t frames = 0;
+      for (; frames < 100; ++frames) {
+        model->cut->select(view, options, resident, result);
+        if (result.wanted.empty()) break;
+        for (const PageWant& want : result.wanted) resident_pages.insert(want.page);
+      }
+      EXPECT_EQ(sorted(result.clusters), full);
+      if (look_ahead) {
+        EXPECT_EQ(frames, 1u);
+      } else {
+        EXPECT_LE(frames, model->view->header().level_count);
+        EXPECT_GE(frames, 2u);
+      }
+      // Only pages the cut needed were loaded.
+      EXPECT_LT(resident_pages.size(), model->view->pages().size());
+      std::printf("[ lod ] %s, look-ahead %s: converged in %u rounds, %zu of %zu pages loaded\n",
+                  model->view->fileName().c_str(), look_ahead ? "on" : "off", frames,
+                  resident_pages.size(), model->view->pages().size());
     }
-    EXPECT_EQ(sorted(result.clusters), full);
-    EXPECT_LE(frames, model->view->header().level_count);
-    EXPECT_GE(frames, 2u);
-    // Only pages the cut needed were loaded.
-    EXPECT_LT(resident_pages.size(), model->view->pages().size());
-    std::printf("[ lod ] %s: converged in %u frames, %zu of %zu pages loaded\n",
-                model->view->fileName().c_str(), frames, resident_pages.size(),
-                model->view->pages().size());
   }
 }
 
