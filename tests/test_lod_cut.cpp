@@ -26,7 +26,7 @@
 #include "camera.h"
 #include "lod_cut.h"
 #include "package_view.h"
-#include "package_writer.h"
+#include "package_rewrite_support.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
 #include "tws_writer.h"
@@ -236,48 +236,10 @@ const Model& plant() {
   return *model;
 }
 
-// Copies a package, optionally with its group table reversed and/or every mesh cluster in a page
-// of its own (the preprocessor packs 128 KiB pages, so a small model has only a few; one page per
-// cluster makes residency tests fine-grained).
-void rewritePackage(const PackageView& view, const fs::path& file, bool reverse_groups,
-                    bool page_per_cluster) {
-  PackageStorage storage;
-  storage.origin = view.origin();
-  storage.position_step_m = view.positionStepM();
-  storage.target_page_bytes = view.header().target_page_bytes;
-  storage.input_hash = view.header().input_hash;
-  const auto group_count = static_cast<uint32_t>(view.groups().size());
-  auto flip = [&](uint32_t g) {
-    return g == kNone || !reverse_groups ? g : group_count - 1 - g;
-  };
-  std::vector<std::vector<uint8_t>> raw_pages(view.pages().size());
-  for (uint32_t p = 0; p < raw_pages.size(); ++p) view.readPage(p, raw_pages[p]);
-  if (!page_per_cluster) storage.pages = raw_pages;
-  for (pkg::ClusterRecord c : view.clusters()) {
-    c.group = flip(c.group);
-    c.parent_group = flip(c.parent_group);
-    if (page_per_cluster && c.kind == static_cast<uint8_t>(pkg::ClusterKind::Mesh)) {
-      const std::vector<uint8_t>& raw = raw_pages[c.page];
-      storage.pages.emplace_back(raw.begin() + c.page_offset,
-                                 raw.begin() + c.page_offset + c.encoded_bytes);
-      c.page = static_cast<uint32_t>(storage.pages.size() - 1);
-      c.page_offset = 0;
-    }
-    storage.clusters.push_back(c);
-  }
-  for (uint32_t g = 0; g < group_count; ++g) storage.groups.push_back(view.groups()[flip(g)]);
-  storage.instances.assign(view.instances().begin(), view.instances().end());
-  storage.profile_points.assign(view.profilePoints().begin(), view.profilePoints().end());
-  storage.objects.assign(view.objects().begin(), view.objects().end());
-  storage.layers.assign(view.layers().begin(), view.layers().end());
-  storage.strings = std::string(view.strings());
-  writePackage(storage, file);
-}
-
 const Model& bunnyPaged() {
   static std::unique_ptr<Model> model = [] {
     fs::path out = modelDir() / "bunny-paged.twk";
-    rewritePackage(*bunny().view, out, false, true);
+    test::rewritePackage(*bunny().view, out, false, true);
     return loadModel(out);
   }();
   return *model;
@@ -286,7 +248,7 @@ const Model& bunnyPaged() {
 const Model& plantPaged() {
   static std::unique_ptr<Model> model = [] {
     fs::path out = modelDir() / "plant-paged.twk";
-    rewritePackage(*plant().view, out, false, true);
+    test::rewritePackage(*plant().view, out, false, true);
     return loadModel(out);
   }();
   return *model;
@@ -860,7 +822,7 @@ TEST(LodCut, RecoversFromAThrowingPredicate) {
 TEST(LodCut, DoesNotDependOnGroupOrder) {
   const Model& model = bunnyPaged();
   fs::path file = test::scratchDir() / "reversed.twk";
-  rewritePackage(*model.view, file, true, false);
+  test::rewritePackage(*model.view, file, true, false);
   PackageView reversed = PackageView::open(file);
   // The preprocessor writes groups in build order (a group after the groups that produced its
   // children); the reversed copy breaks that everywhere, and the view still accepts it.
