@@ -204,10 +204,13 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     // Prefetch: the cut from where the camera will be, at a lower priority than what is
     // missing now.
     if (options_.prefetch && last_position_ && time_s > last_time_s_) {
-      const glm::dvec3 velocity = (camera.position - *last_position_) / (time_s - last_time_s_);
+      const double step_s = time_s - last_time_s_;
+      const glm::dvec3 velocity = (camera.position - *last_position_) / step_s;
       if (glm::length(velocity) > 1e-3) {
+        // At least as far as the next frame will be, when frames are further apart than that
+        // (a replay at a low frame rate).
         Camera ahead = camera;
-        ahead.position += velocity * options_.prefetch_ahead_s;
+        ahead.position += velocity * std::max(options_.prefetch_ahead_s, step_s);
         const glm::dvec3 ahead_eye = ahead.position - view_->origin();
         cut_view.eye = ahead_eye;
         cut_view.frustum = makeFrustum(ahead, ahead_eye, aspect);

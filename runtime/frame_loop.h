@@ -41,7 +41,7 @@ struct WalkthroughOptions {
   OcclusionMode occlusion = OcclusionMode::Hzb;  // never applied in reference mode
   HzbOptions hzb;
   bool prefetch = true;          // along the camera's velocity
-  double prefetch_ahead_s = 0.5;
+  double prefetch_ahead_s = 0.5;  // or the time since the last frame, when longer
   double target_fps = 0.0;       // > 0: adapt tau to hold this frame rate
   double min_tau_px = 0.25, max_tau_px = 64.0;
   bool finish_each_frame = true;  // glFinish so frame_ms includes the GPU (headless timing)

@@ -11,6 +11,7 @@
 #include "camera_path.h"
 #include "egl_context.h"
 #include "frame_loop.h"
+#include "package_rewrite_support.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
 #include "tws_writer.h"
@@ -27,6 +28,17 @@ fs::path bunnyPackage() {
     options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
     options.output = out;
     runPreprocess(options);
+    return out;
+  }();
+  return path;
+}
+
+// The bunny with every mesh cluster in a page of its own (it packs into 5 pages otherwise), for
+// paging tests that need residency to follow the cut closely.
+fs::path pagedBunnyPackage() {
+  static const fs::path path = [] {
+    fs::path out = test::processScratchDir("frame_loop_bunny") / "bunny-paged.twk";
+    test::rewritePackage(PackageView::open(bunnyPackage()), out, false, true);
     return out;
   }();
   return path;
@@ -188,6 +200,34 @@ TEST_F(FrameLoop, SlowPagesNeverStallAFrameAndTheCutConverges) {
   }
   EXPECT_EQ(last.ancestor_fallbacks, 0u) << "the cut did not converge in " << frames << " frames";
   EXPECT_GT(last.triangles_drawn, first.triangles_drawn);
+}
+
+// A replay at a low frame rate (camera time 2 s a frame, four times the 0.5 s prefetch horizon):
+// the prefetch looks one frame's step ahead, so with the camera moving steadily toward the model
+// every frame after the first two finds the pages its cut wants already loaded. The render thread
+// loads (loader_threads 0), so which pages are resident at each frame does not depend on timing.
+TEST_F(FrameLoop, PrefetchCoversTheNextFrameAtLowFrameRates) {
+  uint32_t fallbacks_with = 0, fallbacks_without = 0;
+  for (bool prefetch : {true, false}) {
+    WalkthroughOptions options;
+    options.width = 160;
+    options.height = 120;
+    options.tau_px = 0.5;
+    options.pager.loader_threads = 0;
+    options.prefetch = prefetch;
+    Walkthrough walk(pagedBunnyPackage(), options);
+    const glm::dvec3 center = 0.5 * (walk.worldMin() + walk.worldMax());
+    const double size = glm::length(walk.worldMax() - walk.worldMin());
+    uint32_t& fallbacks = prefetch ? fallbacks_with : fallbacks_without;
+    for (int k = 0; k < 7; ++k) {
+      const Camera camera = lookingAt(center + glm::dvec3(0, -(12.0 - 1.8 * k) * size, 0), center);
+      const FrameStats stats = walk.renderFrame(camera, 2.0 * k);
+      // Frame 0 has no velocity yet, so frame 1 may wait for its own pages.
+      if (k >= 2) fallbacks += stats.ancestor_fallbacks;
+    }
+  }
+  EXPECT_EQ(fallbacks_with, 0u);
+  EXPECT_GT(fallbacks_without, 0u);  // the test has teeth: without prefetch the cut lags
 }
 
 TEST_F(FrameLoop, TargetFpsMovesTau) {
