@@ -114,15 +114,18 @@ vec3 facetNormal(vec3 pos_eye) {
   float len = length(n);
   return len > 1e-30 ? n / len : normalize(-pos_eye);
 }
-// n: unit normal (either side), pos_eye: the shaded point relative to the eye.
-vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
-  vec3 to_eye = -pos_eye;
-  if (dot(n, to_eye) < 0.0) n = -n;
-  vec3 v = normalize(to_eye);
+// n: unit normal of the side seen (it may lean a little away from the eye at a silhouette),
+// pos_eye: the shaded point relative to the eye.
+vec4 shadeSeenSide(vec4 base, vec3 n, vec3 pos_eye) {
+  vec3 v = normalize(-pos_eye);
   vec3 light = mix(kGround, kSky, 0.5 + 0.5 * n.z) * 0.55
              + vec3(0.50) * max(dot(n, kSunDir), 0.0)
              + vec3(0.22) * max(dot(n, v), 0.0);
   return vec4(min(base.rgb * light, vec3(1.0)), 1.0);
+}
+// n: unit normal, either side; the side facing the eye is shaded.
+vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
+  return shadeSeenSide(base, dot(n, pos_eye) > 0.0 ? -n : n, pos_eye);
 }
 )";
 }

@@ -34,6 +34,13 @@ constexpr std::array<uint32_t, 28> kLevels = {1,   2,   3,   4,   5,   6,   8,  
                                               192, 256, 320, 384, 512, 640, 768, 1024};
 static_assert(kLevels.back() == kMaxArcSegments);
 
+// How far out a straddling ring of n segments puts its vertices (UnitMeshBuilder::
+// straddlingCircle), as a factor of the radius: 2 / (1 + cos(pi / n)); 4/3 at the fewest, 3.
+float ringSwell(uint32_t n) {
+  return static_cast<float>(2.0 / (1.0 + std::cos(std::numbers::pi / std::max(n, 3u))));
+}
+const float kMaxRingSwell = ringSwell(3);
+
 uint32_t levelIndex(uint32_t segments) {
   const auto it = std::lower_bound(kLevels.begin(), kLevels.end(), segments);
   return it == kLevels.end() ? uint32_t(kLevels.size() - 1) : uint32_t(it - kLevels.begin());
@@ -89,7 +96,7 @@ bool tubeInsideHidden(const InstanceBounds& b, const glm::vec3& eye, float margi
   if (!(length2 > 0.0f)) return false;
   const float t = glm::dot(to_eye, b.axis) / length2;
   if (t < 0.0f || t > 1.0f) return false;
-  return glm::length(to_eye - t * b.axis) > b.size[0] + margin;
+  return glm::length(to_eye - t * b.axis) > kMaxRingSwell * b.size[0] + margin;
 }
 
 InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2> profile_points,
@@ -97,6 +104,20 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   InstanceBounds b;
   glm::vec3 lo, hi;
   if (!ParametricInstanceMeshes::handles(in.type) || !instanceLocalBox(in, profile_points, lo, hi)) return b;
+  // Straddling rings reach out past the true circle: the bounds take in the most they may.
+  const float* p = in.params;
+  const float swell = kMaxRingSwell - 1.0f;
+  glm::vec3 grow(0.0f);
+  switch (static_cast<pkg::PrimitiveType>(in.type)) {
+    case pkg::PrimitiveType::Cylinder: grow = {swell * p[0], swell * p[0], 0.0f}; break;
+    case pkg::PrimitiveType::Cone:
+      grow = {swell * std::max(p[0], p[1]), swell * std::max(p[0], p[1]), 0.0f};
+      break;
+    case pkg::PrimitiveType::TorusSegment: grow = glm::vec3(swell * p[1]); break;
+    default: break;
+  }
+  lo -= grow;
+  hi += grow;
   const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                          in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
   const glm::vec3 scale(glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2]));
@@ -110,7 +131,6 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   for (int axis = 0; axis < 3; ++axis)  // |linear| times the half sizes, row by row
     b.extent[axis] = std::abs(linear[0][axis]) * half.x + std::abs(linear[1][axis]) * half.y +
                      std::abs(linear[2][axis]) * half.z;
-  const float* p = in.params;
   switch (static_cast<pkg::PrimitiveType>(in.type)) {
     case pkg::PrimitiveType::Cylinder: b.size = {p[0] * cross, p[1] * scale.z, 0.0f}; break;
     case pkg::PrimitiveType::Cone: b.size = {std::max(p[0], p[1]) * cross, p[2] * scale.z, 0.0f}; break;
@@ -169,7 +189,7 @@ class UnitMeshBuilder {
 
   UnitMesh tube(uint32_t n) {
     UnitMesh m = begin();
-    const std::vector<glm::vec2> ring = circle(n);
+    const std::vector<glm::vec2> ring = straddlingCircle(n);
     // Side rims, then the caps' own rims (flat normals), then the cap centres.
     for (float rim : {1.0f, 2.0f})
       for (float z : {0.0f, 1.0f})
@@ -215,7 +235,7 @@ class UnitMeshBuilder {
   // nu steps along the sweep (nu + 1 columns), nv rows around the tube.
   UnitMesh torus(uint32_t nu, uint32_t nv) {
     UnitMesh m = begin();
-    const std::vector<glm::vec2> ring = circle(nv);
+    const std::vector<glm::vec2> ring = straddlingCircle(nv);
     for (const glm::vec2& cs : ring)
       for (uint32_t i = 0; i <= nu; ++i) shapes.push_back({float(i) / float(nu), cs.x, cs.y, 0.0f});
     auto at = [nu](uint32_t row, uint32_t i) { return row * (nu + 1) + i; };
@@ -292,6 +312,16 @@ class UnitMeshBuilder {
     }
     return ring;
   }
+  // A ring whose chords cross the true circle: vertices pushed out so the polygon's largest
+  // distance inside (at chord middles) equals its largest outside (at vertices), each half the
+  // inscribed polygon's sagitta. A pipe then keeps its width on average, seen from any side,
+  // instead of always looking thinner; in a rack of pipes, the gaps between them stay closed.
+  static std::vector<glm::vec2> straddlingCircle(uint32_t n) {
+    std::vector<glm::vec2> ring = circle(n);
+    const float out = ringSwell(n);
+    for (glm::vec2& p : ring) p *= out;
+    return ring;
+  }
 };
 
 // How one visible instance is drawn: its unit mesh (shape and level indices, or a box axis), end
@@ -314,6 +344,9 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
   f.capped = (b.flags & kCapped) != 0;
   bool closed = true;
   float across = 0.0f;  // thin forms: the width the line or point stands for
+  // Cross-section rings (tubes, tori, spheres) at half the tolerance: a ring's error shows on
+  // both sides of a pipe, so its width is what tau bounds (docs/parametrics.md, "Rings").
+  const float ring_tolerance = 0.5f * tolerance;
   switch (surfaceOf(b.type)) {
     case Shape::Tube:
       if (2.0f * b.size[0] < thin) {
@@ -323,7 +356,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         break;
       }
       f.shape = Shape::Tube;
-      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), tolerance));
+      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), ring_tolerance));
       closed = f.capped || inside_hidden;
       break;
     case Shape::Sphere:
@@ -333,8 +366,8 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         break;
       }
       f.shape = Shape::Sphere;
-      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), tolerance));
-      f.b = levelIndex(std::max(2u, arcSegments(b.size[0], float(std::numbers::pi), tolerance)));
+      f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), ring_tolerance));
+      f.b = levelIndex(std::max(2u, arcSegments(b.size[0], float(std::numbers::pi), ring_tolerance)));
       break;
     case Shape::Torus: {
       f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), tolerance));
@@ -344,7 +377,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         break;
       }
       f.shape = Shape::Torus;
-      f.b = levelIndex(arcSegments(b.size[1], float(kTwoPi), tolerance));
+      f.b = levelIndex(arcSegments(b.size[1], float(kTwoPi), ring_tolerance));
       closed = false;
       break;
     }
@@ -418,7 +451,10 @@ glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, con
   switch (shape) {
     case Shape::Tube:
       if (q.w != 1.0f) return glm::vec3(0.0f);
-      if (type == pkg::PrimitiveType::Cone) return {p[2] * q.x, p[2] * q.y, p[0] - p[1]};
+      if (type == pkg::PrimitiveType::Cone) {
+        const glm::vec2 c = glm::vec2(q) / std::max(glm::length(glm::vec2(q)), 1e-30f);
+        return {p[2] * c.x, p[2] * c.y, p[0] - p[1]};
+      }
       return {q.x, q.y, 0.0f};
     case Shape::Sphere: return {q.z * q.x, q.z * q.y, q.w};
     case Shape::Torus: {

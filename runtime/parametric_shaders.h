@@ -383,9 +383,16 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
+  // The side seen is the facet's side toward the eye. The interpolated normal is turned to that
+  // side (the inside of an open tube) but not to the eye: on a coarse ring it leans away from
+  // the eye near a silhouette, and flipping it there would shade a pixel of the lit side as if
+  // it were the far side, a dark speck inside the pipe.
+  vec3 facet = facetNormal(pos_eye);
+  if (dot(facet, pos_eye) > 0.0) facet = -facet;
   float len = length(v_normal);
-  vec3 n = len > 0.25 ? v_normal / len : facetNormal(pos_eye);
-  out_color = shadeSurface(objectBaseColor(v_object), n, pos_eye);
+  vec3 n = facet;
+  if (len > 0.25) n = dot(v_normal, facet) < 0.0 ? -v_normal / len : v_normal / len;
+  out_color = shadeSeenSide(objectBaseColor(v_object), n, pos_eye);
   out_id = v_object + 1u;
 }
 )";
