@@ -465,14 +465,6 @@ glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, con
   }
 }
 
-// A unit (or zero) normal as GL_INT_2_10_10_10_REV, normalized.
-uint32_t packNormal(const glm::vec3& n) {
-  auto component = [](float v) {
-    return uint32_t(int32_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 511.0f))) & 0x3ffu;
-  };
-  return component(n.x) | (component(n.y) << 10) | (component(n.z) << 20);
-}
-
 uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
 
 // The profile polyline without the points that lie within `tolerance` of the line between their
@@ -648,12 +640,7 @@ struct ParametricInstanceMeshes::Impl {
     } else {
       const glm::vec3 origin = anchor_eye + b.origin;
       const auto type = static_cast<pkg::PrimitiveType>(in.type);
-      // Normals go through the cofactor matrix (the inverse transpose times the determinant):
-      // three cross products, and the scale is normalized away; its sign is the determinant's.
-      const float handedness = glm::determinant(linear) < 0.0f ? -1.0f : 1.0f;
-      const glm::mat3 normal_matrix(handedness * glm::cross(linear[1], linear[2]),
-                                    handedness * glm::cross(linear[2], linear[0]),
-                                    handedness * glm::cross(linear[0], linear[1]));
+      const glm::mat3 normal_matrix = normalMatrix(linear);  // scale normalized away below
       for (uint32_t v = 0; v < vertex_count; ++v) {
         const glm::vec4& q = builder.shapes[mesh.base_vertex + v];
         const glm::vec3 n = normal_matrix * shapedNormal(type, f.shape, in.params, q);

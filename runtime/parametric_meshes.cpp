@@ -124,6 +124,20 @@ bool instanceLocalBox(const pkg::InstanceRecord& in, std::span<const glm::vec2> 
   }
 }
 
+uint32_t packNormal(const glm::vec3& n) {
+  auto component = [](float v) {
+    return uint32_t(int32_t(std::lround(std::clamp(v, -1.0f, 1.0f) * 511.0f))) & 0x3ffu;
+  };
+  return component(n.x) | (component(n.y) << 10) | (component(n.z) << 20);
+}
+
+glm::mat3 normalMatrix(const glm::mat3& linear) {
+  const float handedness = glm::determinant(linear) < 0.0f ? -1.0f : 1.0f;
+  return glm::mat3(handedness * glm::cross(linear[1], linear[2]),
+                   handedness * glm::cross(linear[2], linear[0]),
+                   handedness * glm::cross(linear[0], linear[1]));
+}
+
 glm::dvec3 clusterAnchor(const pkg::ClusterRecord& c) {
   return glm::dvec3(c.center[0], c.center[1], c.center[2]);
 }
@@ -152,8 +166,18 @@ void tessellateCluster(const PackageView& view, uint32_t cluster, float toleranc
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
     const glm::vec3 origin(glm::dvec3(in.origin[0], in.origin[1], in.origin[2]) - anchor);
+    const glm::mat3 normals = normalMatrix(linear);
+    const bool with_normals = mesh.normals.size() == mesh.positions.size();
     const uint32_t base = static_cast<uint32_t>(vertices.size());
-    for (const glm::vec3& q : mesh.positions) vertices.push_back({origin + linear * q, in.object});
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+      glm::vec3 n(0.0f);
+      if (with_normals) {
+        n = normals * mesh.normals[v];
+        const float length = glm::length(n);
+        n = length > 1e-20f ? n / length : glm::vec3(0.0f);
+      }
+      vertices.push_back({origin + linear * mesh.positions[v], in.object, packNormal(n)});
+    }
     for (uint32_t index : mesh.indices) indices.push_back(base + index);
     if (instance_offsets) instance_offsets->push_back(static_cast<uint32_t>(indices.size()));
   }
@@ -272,7 +296,7 @@ ParametricMeshes::ParametricMeshes(const PackageView& view, const ParametricMesh
   impl_->view = &view;
   impl_->options = options;
   impl_->program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricMeshVertexShader()},
-                                   {GL_FRAGMENT_SHADER, gl::parametricMeshFragmentShader()}},
+                                   {GL_FRAGMENT_SHADER, gl::parametricSmoothFragmentShader()}},
                                   "ParametricMeshes: mesh");
   GLuint& vao = impl_->vertex_array;
   glCreateVertexArrays(1, &vao);
@@ -282,6 +306,9 @@ ParametricMeshes::ParametricMeshes(const PackageView& view, const ParametricMesh
   glEnableVertexArrayAttrib(vao, 1);
   glVertexArrayAttribIFormat(vao, 1, 1, GL_UNSIGNED_INT, offsetof(ParametricVertex, object));
   glVertexArrayAttribBinding(vao, 1, 0);
+  glEnableVertexArrayAttrib(vao, 2);
+  glVertexArrayAttribFormat(vao, 2, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(ParametricVertex, normal));
+  glVertexArrayAttribBinding(vao, 2, 0);
 }
 
 ParametricMeshes::~ParametricMeshes() = default;

@@ -34,11 +34,23 @@ struct ParametricMeshOptions {
   double fixed_tolerance_m = 0.0;     // > 0: every cluster at this tolerance (tests, references)
 };
 
-// One vertex of a tessellated cluster: 16 bytes.
+// One vertex of a tessellated cluster: 20 bytes. The normal is the surface's own (the
+// tessellator's, placed), so a tessellation shades like the smooth surface it approximates,
+// whatever its tolerance: a reference at 2 mm and a coarse level differ by their silhouettes,
+// not by the bands of their facets.
 struct ParametricVertex {
   glm::vec3 position;  // metres from the cluster's anchor
   uint32_t object;     // object index
+  uint32_t normal;     // packNormal
 };
+
+// A unit (or zero) normal as GL_INT_2_10_10_10_REV, normalized.
+uint32_t packNormal(const glm::vec3& unit_or_zero);
+
+// The matrix that carries normals of an instance's canonical frame through `linear`: its cofactor
+// matrix (the inverse transpose times the determinant, three cross products), with the
+// determinant's sign taken out so a mirroring frame keeps normals outward. Not normalized.
+glm::mat3 normalMatrix(const glm::mat3& linear);
 
 // The scene.h primitive an instance record stands for (parameters as in package_format.h).
 Primitive primitiveOf(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points);

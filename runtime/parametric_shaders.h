@@ -320,33 +320,23 @@ void main() {
 }
 
 // Tessellated parametrics (parametric_meshes.h): float positions relative to the cluster's
-// anchor, one object index per vertex; faceted like the mesh pass (derivative normals).
+// anchor, one object index and one normal (the surface's own) per vertex; shaded by
+// parametricSmoothFragmentShader like the instances below.
 inline std::string parametricMeshVertexShader() {
   return R"(#version 450 core
 layout(location = 0) in vec3 position;  // metres from the cluster anchor
 layout(location = 1) in uint object;
+layout(location = 2) in vec3 normal;    // world, unit or zero
 layout(location = 0) uniform mat4 view_projection;
 layout(location = 6) uniform vec3 anchor_eye;
 out vec3 pos_eye;
+out vec3 v_normal;
 flat out uint v_object;
 void main() {
   pos_eye = anchor_eye + position;
+  v_normal = normal;
   v_object = object;
   gl_Position = view_projection * vec4(pos_eye, 1.0);
-}
-)";
-}
-
-inline std::string parametricMeshFragmentShader() {
-  return std::string(R"(#version 450 core
-in vec3 pos_eye;
-flat in uint v_object;
-layout(location = 0) out vec4 out_color;
-layout(location = 1) out uint out_id;
-)") + shadingGlsl() + R"(
-void main() {
-  out_color = shadeSurface(objectBaseColor(v_object), facetNormal(pos_eye), pos_eye);
-  out_id = v_object + 1u;
 }
 )";
 }

@@ -83,9 +83,10 @@ struct Frame {
 // meshes are compared at full resolution, not at a LOD whose error is a fraction of a pixel).
 Frame render(const fs::path& package, const Camera& camera, ParametricMode mode,
              OcclusionMode occlusion = OcclusionMode::Off, Walkthrough** keep = nullptr,
-             bool reference = false, double tau_px = 0.25) {
+             bool reference = false, double tau_px = 0.25, double fixed_tolerance_m = 0.0) {
   WalkthroughOptions options;
   options.reference = reference;
+  options.parametric_meshes.fixed_tolerance_m = fixed_tolerance_m;
   options.width = kWidth;
   options.height = kHeight;
   options.occlusion = occlusion;
@@ -612,6 +613,37 @@ TEST_F(ParametricRendering, CoarsePipeHasNoDarkSpecks) {
   }
   ASSERT_GT(both, 5000u);
   EXPECT_LE(dark, both / 1000) << dark << " of " << both;
+}
+
+// A pipe tessellated whole at a fixed tolerance (how references draw parametrics) shades like the
+// smooth surface, not facet by facet: a reference and a coarser level of the same pipe then differ
+// by their silhouettes, not by the bands of their facets. The pipe is 40 pixels in radius and its
+// ring 13 segments, each about 19 pixels wide; flat facets would miss the fine mesh's colour by
+// up to 40 of 255 near their edges.
+TEST_F(ParametricRendering, FixedTolerancePipeShadesLikeTheSurface) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 20.0, 0.0});
+  const double metres_per_px = 20.0 / camera.pixelScale(kHeight);
+  const float radius = static_cast<float>(40.0 * metres_per_px);
+  const float length = static_cast<float>(200.0 * metres_per_px);
+  const std::vector<Part> parts = {
+      {1, Cylinder{radius, length, false}, placed({-0.5 * length, 20.0 + radius, 0.0}, {20, 90, 0})}};
+  const double tolerance_m = 0.03 * radius;  // 13 segments a ring
+  ASSERT_EQ(arcSegments(radius, 2.0f * std::numbers::pi_v<float>, float(tolerance_m)), 13u);
+  const Frame coarse = render(buildPackage("bands", parts, false), camera, ParametricMode::Tessellated,
+                              OcclusionMode::Off, nullptr, true, 0.25, tolerance_m);
+  const Frame fine = render(buildPackage("bands_mesh", parts, true), camera, ParametricMode::Impostor,
+                            OcclusionMode::Off, nullptr, true);
+  size_t both = 0, banded = 0;
+  for (size_t i = 0; i < coarse.ids.size(); ++i) {
+    if (coarse.ids[i] != 1u || fine.ids[i] != 1u) continue;
+    ++both;
+    int worst = 0;
+    for (int k = 0; k < 3; ++k)
+      worst = std::max(worst, std::abs(int(coarse.rgba[4 * i + k]) - int(fine.rgba[4 * i + k])));
+    banded += worst > 12;
+  }
+  ASSERT_GT(both, 10000u);
+  EXPECT_LT(double(banded) / double(both), 0.01) << banded << " of " << both;
 }
 
 // An I-beam (an extrusion) close by is drawn from its profile; at a distance where the profile's
