@@ -99,6 +99,27 @@ bool tubeInsideHidden(const InstanceBounds& b, const glm::vec3& eye, float margi
   return glm::length(to_eye - t * b.axis) > kMaxRingSwell * b.size[0] + margin;
 }
 
+// Whether `eye` (relative to the anchor) lies more than `margin` outside the instance's solid,
+// which makes the back faces of its closed surface hidden by its front faces. The bounding sphere
+// alone is too cautious for long or flat instances: standing under a deck or beside a 12 m pipe
+// run, the eye is inside their spheres though far outside the solids, and drawing both faces
+// doubled what llvmpipe rasterized of them (docs/parametrics.md, "Back faces"). So also the
+// world-axis box (which holds every handled shape) and, for tubes, the capped cylinder: farther
+// from the axis than the widest ring reaches, or beyond an end plane.
+bool eyeOutsideSolid(const InstanceBounds& b, const glm::vec3& eye, float margin) {
+  const glm::vec3 from_centre = eye - b.centre;
+  if (glm::length(from_centre) > b.radius + margin) return true;
+  const glm::vec3 d = glm::abs(from_centre) - b.extent;
+  if (std::max({d.x, d.y, d.z}) > margin) return true;
+  if (surfaceOf(b.type) != Shape::Tube) return false;
+  const float length = glm::length(b.axis);
+  if (!(length > 0.0f)) return false;
+  const glm::vec3 to_eye = eye - b.origin;
+  const float along = glm::dot(to_eye, b.axis) / length;  // metres from the base plane
+  if (along < -margin || along > length + margin) return true;
+  return glm::length(to_eye - (along / length) * b.axis) > kMaxRingSwell * b.size[0] + margin;
+}
+
 InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2> profile_points,
                         const glm::dvec3& anchor) {
   InstanceBounds b;
@@ -336,8 +357,8 @@ struct Form {
 
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; thinner
 // than `thin` metres across, a line or a point, or nothing when thinner than `min_thin`.
-// `eye_outside`: the eye is outside the bounding sphere; `inside_hidden`: an open tube's inside
-// cannot be seen (tubeInsideHidden).
+// `eye_outside`: the eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's
+// inside cannot be seen (tubeInsideHidden).
 Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin,
                 bool eye_outside, bool inside_hidden) {
   Form f;
@@ -421,7 +442,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
     f.batch = kLines;
   else if (f.shape == Shape::Point)
     f.batch = kPoints;
-  else if (closed && eye_outside)  // back faces of closed surfaces, unless the eye may be inside
+  else if (closed && (eye_outside || inside_hidden))  // back faces hidden by the front faces
     f.batch = (b.flags & kMirrored) ? kCullCw : kCullCcw;
   return f;
 }
@@ -734,6 +755,11 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
   for (glm::vec4& plane : planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-30f);
   const double pixel_scale = std::max(view.pixel_scale, 1e-9);
   const double near_m = std::max(view.near_m, 1e-6);
+  // How far from the eye the near plane reaches (its corners): an eye closer than that to a
+  // surface may see it clipped open, so back faces are kept there.
+  const float near_reach = static_cast<float>(
+      near_m * std::sqrt(1.0 + 1.0 / std::max(double(glm::dot(glm::vec3(row_x), glm::vec3(row_x))), 1e-12) +
+                         1.0 / std::max(double(glm::dot(glm::vec3(row_y), glm::vec3(row_y))), 1e-12)));
 
   s.vertices.clear();
   for (auto& list : s.indices) list.clear();
@@ -772,8 +798,8 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
         chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
                    static_cast<float>(view.thin_px) * metres_per_px,
                    static_cast<float>(view.min_thin_px) * metres_per_px,
-                   centre_distance > b.radius + near_m,
-                   !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, float(near_m)));
+                   eyeOutsideSolid(b, -anchor_eye, near_reach),
+                   !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach));
     if (form.shape == Shape::None) {
       ++stats.instances_culled;
       return;
@@ -840,6 +866,7 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
                    reinterpret_cast<const void*>(first[batch] * sizeof(uint32_t)));
     ++stats.draw_calls;
     if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
+    if (batch == kTwoSided) stats.two_sided_triangles += count / 3;
   }
   glDisable(GL_CULL_FACE);
   glFrontFace(GL_CCW);

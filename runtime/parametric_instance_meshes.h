@@ -8,8 +8,9 @@
 // arcs projects to at most tolerance_px (the frame's tau). Thin ones become one-pixel lines or
 // points (InstanceLodView::thin_px), extrusions whose profile detail is below tolerance their box.
 // Instances outside the frustum's side planes or whose bounding sphere projects below
-// min_feature_px are dropped. Closed surfaces seen from outside, and open tubes seen from
-// between their end planes, have their back faces culled.
+// min_feature_px are dropped. Closed surfaces seen from outside the solid (not merely outside
+// its bounding sphere), and open tubes seen from between their end planes, have their back faces
+// culled.
 // How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
 // formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
 // every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex
@@ -70,6 +71,7 @@ struct InstanceLodStats {
   uint64_t instances_drawn = 0;    // after culling
   uint64_t instances_culled = 0;   // frustum side planes, small features, below min_thin_px
   uint64_t triangles_drawn = 0;    // submitted (back faces included)
+  uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
   uint64_t thin_instances = 0;     // of instances_drawn: as lines or points
   uint64_t instances_occluded = 0; // second pass: hidden by the pyramid, one by one
   uint32_t draw_calls = 0;

@@ -314,11 +314,13 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.instances_drawn += lod_stats.instances_drawn;
     stats.instances_occluded += lod_stats.instances_occluded;
     stats.mesh_triangles += lod_stats.triangles_drawn;
+    stats.two_sided_triangles += lod_stats.two_sided_triangles;
     const ParametricMeshStats profile_stats = s.meshes->drawInstances(
         s.profile_instances, view.eye, view_projection, view.pixel_scale, view.tolerance_px,
         r.objectColorCount(), frame);
     stats.instances_drawn += profile_stats.instances_drawn;
     stats.mesh_triangles += profile_stats.triangles_drawn;
+    stats.two_sided_triangles += profile_stats.triangles_drawn;
     stats.meshes_built += profile_stats.meshes_built;
   }
   if (!s.mesh_clusters.empty()) {
@@ -329,6 +331,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.clusters_drawn += mesh_stats.clusters_drawn;
     stats.instances_drawn += mesh_stats.instances_drawn;
     stats.mesh_triangles += mesh_stats.triangles_drawn;
+    stats.two_sided_triangles += mesh_stats.triangles_drawn;
     stats.meshes_built += mesh_stats.meshes_built;
   }
   stats.cpu_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();

@@ -488,6 +488,36 @@ TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
   }
 }
 
+// Standing under a deck beside a long capped pipe, the eye is inside both bounding spheres but
+// outside both solids: their back faces are hidden, so they are culled (with the sphere test
+// alone, all of both were drawn two-sided). The picture is unchanged: it matches the fine
+// meshes, which draw both faces. Inside a room-sized box, its faces must stay two-sided.
+TEST_F(ParametricRendering, BackFacesCulledOutsideTheSolidNotItsSphere) {
+  const Part deck{1, Box{{4.0f, 4.0f, 0.075f}}, placed({0, 0, 2.0})};
+  const Part pipe{2, Cylinder{0.1f, 12.0f, true}, placed({-6, 0.5, 1.6}, {0, 90, 0})};
+  const Camera camera = lookingAt({0.0, -0.8, 0.3}, {0.5, 0.6, 2.0});
+  const Frame culled = render(buildPackage("backfaces", {deck, pipe}, false), camera,
+                              ParametricMode::Tessellated);
+  const Frame mesh = render(buildPackage("backfaces_mesh", {deck, pipe}, true), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(culled.stats.parametric_instances_drawn, 2u);
+  EXPECT_GT(culled.stats.parametric_triangles, 20u);
+  EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+  Agreement g = compare(culled, mesh, 2e-3);
+  EXPECT_GT(g.covered, size_t(kWidth * kHeight / 2));
+  EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+  EXPECT_EQ(idAt(culled, pixelOf(camera, {0.5, 0.5, 1.6})), 2u);
+
+  const Part room{1, Box{{2.0f, 2.0f, 1.5f}}, placed({0, 0, 1.5})};
+  const Camera inside = lookingAt({0.0, 0.0, 1.5}, {1.0, 0.3, 1.6});
+  const Frame room_frame = render(buildPackage("backfaces_room", {room}, false), inside,
+                                  ParametricMode::Tessellated);
+  EXPECT_GT(room_frame.stats.parametric_two_sided_triangles, 0u);
+  size_t walls = 0;
+  for (uint32_t id : room_frame.ids) walls += id == 1u;  // the package's first object
+  EXPECT_EQ(walls, room_frame.ids.size());
+}
+
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
 // drawn with fewer segments, so the pair costs far less than twice the near one alone (a
 // per-cluster resolution would draw both at the near one's).
