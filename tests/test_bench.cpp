@@ -23,7 +23,7 @@ nlohmann::json readJson(const fs::path& path) {
 TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
   const fs::path dir = test::scratchDir();
   const fs::path out = dir / "report";
-  const std::string common = "-q bench --quick --sizes 60K,150K --out " + out.string() +
+  const std::string common = "-q bench --quick --sizes 60K,150K --walk-fps 0.4 --out " + out.string() +
                              " --cache " + (dir / "cache").string() + " --paths " +
                              (fs::path(TW_DATA_DIR) / "paths").string();
   const test::CommandResult run = test::runTerawalk(common);
@@ -37,6 +37,17 @@ TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
   EXPECT_TRUE(results["machine"].contains("cpu"));
   EXPECT_TRUE(results["machine"].contains("renderer"));
   ASSERT_EQ(results["models"].size(), 2u);
+  // Walking at twice the recorded rate: one unrecorded frame between recorded ones, on the walks
+  // inside and by the modes with frame-to-frame state only.
+  EXPECT_EQ(results["configuration"]["walk_fps"], 0.4);
+  EXPECT_EQ(results["configuration"]["walk_modes"],
+            nlohmann::json({"lod_frustum", "lod_frustum_occlusion", "default"}));
+  const auto& decks = results["models"][0]["paths"]["decks"];
+  EXPECT_EQ(decks["default"]["walk_frames"], decks["default"]["frames"].get<int>() - 1);
+  EXPECT_EQ(decks["lod_frustum"]["walk_frames"], decks["lod_frustum"]["frames"].get<int>() - 1);
+  EXPECT_EQ(decks["reference"]["walk_frames"], 0);
+  EXPECT_EQ(decks["lod"]["walk_frames"], 0);
+  EXPECT_EQ(results["models"][0]["paths"]["orbit"]["default"]["walk_frames"], 0);
   for (const auto& model : results["models"]) {
     const auto& pre = model["preprocess"];
     for (const char* key : {"wall_s", "cpu_s", "peak_rss_bytes", "input_triangles",

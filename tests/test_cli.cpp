@@ -275,6 +275,38 @@ TEST(Cli, RenderWritesFramesStatsAndReplaysItsPath) {
   EXPECT_EQ(ref["median_triangles"].get<double>(), 69451.0);  // every bunny triangle
 }
 
+// `--walk-fps`: the camera is also rendered between the recorded frames, which keep their times,
+// their numbering and their PNG names; a negative rate is refused.
+TEST(Cli, RenderWalksBetweenRecordedFrames) {
+  auto package = bunnyPackageForCli();
+  auto dir = test::scratchDir();
+  RunResult orbit = run("render --quiet " + package.string() + " --orbit 4 --size 64x48 --out " +
+                        (dir / "plain").string() + " --save-path " + (dir / "orbit.path").string());
+  ASSERT_EQ(orbit.exit_code, 0) << orbit.output;
+  RunResult r = run("render --quiet " + package.string() + " --path " +
+                    (dir / "orbit.path").string() + " --fps 30 --walk-fps 120 --size 64x48 --png " +
+                    "--out " + (dir / "walked").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  auto summary = nlohmann::json::parse(test::readFile(dir / "walked" / "summary.json"));
+  EXPECT_EQ(summary["frames"], 4);
+  EXPECT_EQ(summary["walk_fps"], 120.0);
+  EXPECT_EQ(summary["walk_frames"], 9);  // three steps between each of the four frames
+  auto walked = nlohmann::json::parse(test::readFile(dir / "walked" / "frames.json"))["frames"];
+  auto plain = nlohmann::json::parse(test::readFile(dir / "plain" / "frames.json"))["frames"];
+  ASSERT_EQ(walked.size(), 4u);
+  for (size_t i = 0; i < walked.size(); ++i) {
+    EXPECT_EQ(walked[i]["frame"], i);
+    EXPECT_DOUBLE_EQ(walked[i]["time_s"].get<double>(), plain[i]["time_s"].get<double>());
+  }
+  EXPECT_TRUE(std::filesystem::exists(dir / "walked" / "frame_00003.png"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "walked" / "frame_00004.png"));
+
+  RunResult negative = run("render --quiet " + package.string() + " --orbit 2 --size 32x32 " +
+                           "--walk-fps -1");
+  EXPECT_EQ(negative.exit_code, 1) << negative.output;
+  EXPECT_NE(negative.output.find("--walk-fps"), std::string::npos) << negative.output;
+}
+
 TEST(Cli, RenderRejectsABadPathFileNamingTheLine) {
   auto package = bunnyPackageForCli();
   auto dir = test::scratchDir();

@@ -39,6 +39,7 @@ struct BenchOptions {
   std::string paths_dir;  // empty: data/paths found from here or from the executable
   std::string image_size;
   double fps = 0.0;
+  double walk_fps = -1.0;  // negative: by --quick
   int runs = 0;
   int orbit_frames = 0;
   std::string compare;
@@ -46,19 +47,23 @@ struct BenchOptions {
   bool keep_frames = false;
 };
 
-// A runtime mode of the suite: its name in results.json and its `terawalk render` flags.
+// A runtime mode of the suite: its name in results.json, its `terawalk render` flags, and
+// whether it walks the paths inside the plant between recorded frames (`--walk-fps`): the modes
+// that occlusion compares and the default do; the reference keeps no state from frame to frame,
+// and LOD alone is a yardstick only its paging would see walking.
 struct Mode {
   const char* name;
   std::vector<std::string> flags;
+  bool walks;
 };
 
 const std::vector<Mode>& modes() {
   static const std::vector<Mode> kModes = {
-      {"reference", {"--reference"}},
-      {"lod", {"--occlusion", "off", "--no-frustum", "--no-prefetch"}},
-      {"lod_frustum", {"--occlusion", "off", "--no-prefetch"}},
-      {"lod_frustum_occlusion", {"--occlusion", "hzb", "--no-prefetch"}},
-      {"default", {}},
+      {"reference", {"--reference"}, false},
+      {"lod", {"--occlusion", "off", "--no-frustum", "--no-prefetch"}, false},
+      {"lod_frustum", {"--occlusion", "off", "--no-prefetch"}, true},
+      {"lod_frustum_occlusion", {"--occlusion", "hzb", "--no-prefetch"}, true},
+      {"default", {}, true},
   };
   return kModes;
 }
@@ -248,6 +253,7 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
   for (const std::string& s : size_names) sizes.push_back(parseCount(s));
   const int runs = o.runs > 0 ? o.runs : (o.quick ? 1 : 3);
   const double fps = o.fps > 0.0 ? o.fps : (o.quick ? 0.2 : 2.0);
+  const double walk_fps = o.walk_fps >= 0.0 ? o.walk_fps : (o.quick ? 0.0 : 10.0);
   const int orbit_frames = o.orbit_frames > 0 ? o.orbit_frames : (o.quick ? 8 : 120);
   int width = o.quick ? 320 : 1280, height = o.quick ? 180 : 720;
   if (!o.image_size.empty()) parseImageSize(o.image_size, "--size", width, height);
@@ -276,12 +282,18 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
         {"sizes", size_names},
         {"runs", runs},
         {"fps", fps},
+        {"walk_fps", walk_fps},
+        {"walk_paths", {"decks", "rack"}},
+        {"walk_modes", json::array()},
         {"image_size", size_text},
         {"orbit_frames", orbit_frames},
         {"modes", json::array()},
         {"paths", {"decks", "rack", "orbit"}}}},
       {"models", json::array()}};
-  for (const Mode& m : modes()) results["configuration"]["modes"].push_back(m.name);
+  for (const Mode& m : modes()) {
+    results["configuration"]["modes"].push_back(m.name);
+    if (m.walks) results["configuration"]["walk_modes"].push_back(m.name);
+  }
 
   for (size_t si = 0; si < sizes.size(); ++si) {
     const std::string name = size_names[si];
@@ -335,6 +347,12 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
                                            path_file.string(), "--fps", std::to_string(fps),
                                            "--size", size_text, "--out", dir.string()};
           args.insert(args.end(), mode.flags.begin(), mode.flags.end());
+          // The walks inside: as an interactive walkthrough moves between recorded frames. The
+          // orbit's frames are a few degrees apart already.
+          if (mode.walks && walk_fps > fps && path_name != "orbit") {
+            args.push_back("--walk-fps");
+            args.push_back(std::to_string(walk_fps));
+          }
           // The first run also keeps frames for fidelity and measures occlusion's pixel loss.
           if (run == 1) {
             args.push_back("--png");
@@ -360,6 +378,7 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
           m[std::string(key) + "_runs"] = values;
         }
         m["frames"] = rows.front().value("frames", 0);
+        m["walk_frames"] = rows.front().value("walk_frames", 0);
         if (rows.front().contains("occlusion_lost_share"))
           m["occlusion_lost_share"] = rows.front()["occlusion_lost_share"];
         if (!results["machine"].contains("renderer") && rows.front().contains("renderer"))
@@ -436,6 +455,9 @@ void registerBenchCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--paths", options->paths_dir, "Directory of the standard camera paths");
   cmd->add_option("--size", options->image_size, "Image size WIDTHxHEIGHT (default 1280x720)");
   cmd->add_option("--fps", options->fps, "Path sampling rate (default 2; --quick 0.2)");
+  cmd->add_option("--walk-fps", options->walk_fps,
+                  "Rate at which the modes that keep frame-to-frame state walk the decks and rack "
+                  "paths between recorded frames (default 10; --quick 0: no walking)");
   cmd->add_option("--runs", options->runs, "Runs per mode (default 3; --quick 1)");
   cmd->add_option("--orbit-frames", options->orbit_frames, "Frames of the orbit path");
   cmd->add_option("--compare", options->compare,

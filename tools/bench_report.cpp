@@ -103,7 +103,15 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
   for (const auto& s : config.at("sizes")) md << " " << s.get<std::string>();
   md << ", " << config.value("runs", 0) << " run(s) per mode (medians), "
      << config.value("image_size", "?") << ", " << fmt(config.value("fps", 0.0), 2)
-     << " frames per path second, orbit " << config.value("orbit_frames", 0) << " frames"
+     << " frames per path second";
+  if (config.value("walk_fps", 0.0) > config.value("fps", 0.0)) {
+    md << " (walked at " << fmt(config.value("walk_fps", 0.0), 1) << " between them on";
+    for (const auto& p : config.value("walk_paths", json::array())) md << " " << p.get<std::string>();
+    md << " by";
+    for (const auto& m : config.value("walk_modes", json::array())) md << " " << m.get<std::string>();
+    md << ")";
+  }
+  md << ", orbit " << config.value("orbit_frames", 0) << " frames"
      << (config.value("quick", false) ? ", --quick" : "") << "\n\n";
 
   // Preprocessing.

@@ -39,6 +39,7 @@ struct RenderArgs {
   std::string out_dir;
   bool png = false;
   double fps = 30.0;
+  double walk_fps = 0.0;
   int max_frames = 0;
   double tau_px = 1.0;
   double min_feature_px = 1.0;
@@ -78,6 +79,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
   if (!(args.fps > 0.0)) throw std::runtime_error("--fps must be positive");
+  if (!(args.walk_fps >= 0.0)) throw std::runtime_error("--walk-fps must not be negative");
   const int path_sources =
       int(!args.path_file.empty()) + int(args.orbit_frames > 0) + int(args.flythrough_frames > 0);
   if (path_sources != 1)
@@ -141,6 +143,9 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   base.far_m = std::max(100.0, 10.0 * diagonal);
   int frames = static_cast<int>(std::floor(path.durationS() * args.fps + 1e-9)) + 1;
   if (args.max_frames > 0) frames = std::min(frames, args.max_frames);
+  // --walk-fps: steps per recorded frame, so the recorded frames keep their times exactly.
+  const int walk_steps = std::max(1, int(std::lround(args.walk_fps / args.fps)));
+  uint64_t walk_frames = 0;
 
   std::vector<FrameStats> all;
   all.reserve(frames);
@@ -152,7 +157,15 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   const double t0 = path.keys.front().time_s;
   for (int i = 0; i < frames; ++i) {
     const double t = t0 + i / args.fps;
+    // The camera between the previous recorded frame and this one, rendered and not recorded:
+    // the pager, prefetch and occlusion see it move as in an interactive walkthrough.
+    for (int step = 1; i > 0 && step < walk_steps; ++step) {
+      const double walk_t = t0 + (i - 1 + double(step) / walk_steps) / args.fps;
+      walk.renderFrame(path.sample(walk_t, base), walk_t);
+      ++walk_frames;
+    }
     FrameStats stats = walk.renderFrame(path.sample(t, base), t);
+    stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
     if (i == 0)
       first_frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
@@ -198,6 +211,8 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
       {"width", width},
       {"height", height},
       {"frames", frames},
+      {"walk_fps", walk_steps * args.fps},
+      {"walk_frames", walk_frames},
       {"tau_px", args.tau_px},
       {"context_ms", context_ms},
       {"open_ms", open_ms},
@@ -291,7 +306,11 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--png", args->png, "Also write frame_NNNNN.png and ids_NNNNN.png");
   cmd->add_option("--fps", args->fps, "Path sampling rate, frames per path second")
       ->capture_default_str();
-  cmd->add_option("--max-frames", args->max_frames, "Stop after this many frames");
+  cmd->add_option("--walk-fps", args->walk_fps,
+                  "Also render the path between recorded frames at this rate, without recording "
+                  "them (rounded to a whole number of steps per frame): paging and occlusion see "
+                  "the camera move as in an interactive walkthrough");
+  cmd->add_option("--max-frames", args->max_frames, "Stop after this many recorded frames");
   cmd->add_option("--tau", args->tau_px, "Screen-space error threshold, pixels")
       ->capture_default_str();
   cmd->add_option("--min-feature-px", args->min_feature_px,
