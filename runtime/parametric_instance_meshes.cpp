@@ -71,6 +71,9 @@ enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kLines, kPoints, kBatchCou
 
 constexpr uint8_t kValid = 1, kCapped = 2, kMirrored = 4;
 constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills its box: a box
+// The transform's columns are perpendicular (rotation, mirroring, scaling along the axes; no
+// shear): a tube's cross-sections are then perpendicular to its axis, within its largest radius.
+constexpr uint8_t kOrthogonalAxes = 16;
 
 // What the per-frame choice reads of an instance, prepared once.
 struct InstanceBounds {
@@ -84,13 +87,14 @@ struct InstanceBounds {
   glm::vec3 origin{0.0f};  // the canonical frame's origin, relative to the anchor
   glm::vec3 axis{0.0f};    // tubes: from the base centre (origin) to the top centre
   uint8_t type = 0;
-  uint8_t flags = 0;       // kValid, kCapped, kMirrored
+  uint8_t flags = 0;       // kValid, kCapped, kMirrored, kRectangleProfile, kOrthogonalAxes
 };
 
 // An open tube's inside can only be seen through its end discs, so from an eye between the two
 // end planes and outside the tube its back faces are hidden by its front faces. `eye` is
 // relative to the anchor.
 bool tubeInsideHidden(const InstanceBounds& b, const glm::vec3& eye, float margin) {
+  if (!(b.flags & kOrthogonalAxes)) return false;
   const glm::vec3 to_eye = eye - b.origin;
   const float length2 = glm::dot(b.axis, b.axis);
   if (!(length2 > 0.0f)) return false;
@@ -111,7 +115,7 @@ bool eyeOutsideSolid(const InstanceBounds& b, const glm::vec3& eye, float margin
   if (glm::length(from_centre) > b.radius + margin) return true;
   const glm::vec3 d = glm::abs(from_centre) - b.extent;
   if (std::max({d.x, d.y, d.z}) > margin) return true;
-  if (surfaceOf(b.type) != Shape::Tube) return false;
+  if (surfaceOf(b.type) != Shape::Tube || !(b.flags & kOrthogonalAxes)) return false;
   const float length = glm::length(b.axis);
   if (!(length > 0.0f)) return false;
   const glm::vec3 to_eye = eye - b.origin;
@@ -173,6 +177,12 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   b.type = static_cast<uint8_t>(in.type);
   b.flags = (finite ? kValid : 0) | ((in.flags & pkg::kInstanceCapped) ? kCapped : 0) |
             (glm::determinant(linear) < 0.0f ? kMirrored : 0);
+  auto perpendicular = [](const glm::vec3& u, const glm::vec3& v) {
+    return std::abs(glm::dot(u, v)) <= 1e-5f * glm::length(u) * glm::length(v);
+  };
+  if (perpendicular(linear[0], linear[1]) && perpendicular(linear[0], linear[2]) &&
+      perpendicular(linear[1], linear[2]))
+    b.flags |= kOrthogonalAxes;
   if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Extrusion)) {
     // Shoelace area against the box's: equal (to float rounding) for a rectangle.
     const auto profile = profile_points.subspan(in.profile_first, in.profile_count);

@@ -516,6 +516,20 @@ TEST_F(ParametricRendering, BackFacesCulledOutsideTheSolidNotItsSphere) {
   size_t walls = 0;
   for (uint32_t id : room_frame.ids) walls += id == 1u;  // the package's first object
   EXPECT_EQ(walls, room_frame.ids.size());
+
+  // A sheared capped cylinder (its axis leans 0.8 m per metre along x): its caps stick out past
+  // the planes through the axis's ends, so the tube test does not apply, and from inside its
+  // walls fill the image.
+  Transform sheared;
+  sheared.origin = {0.0, 0.0, 0.0};
+  sheared.linear = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0.8f, 0, 1));
+  const Part leaning{1, Cylinder{1.0f, 2.0f, true}, sheared};
+  const Camera in_cylinder = lookingAt({-0.66, 0.0, 0.3}, {0.5, 0.2, 0.9});
+  const Frame leaning_frame = render(buildPackage("backfaces_sheared", {leaning}, false),
+                                     in_cylinder, ParametricMode::Tessellated);
+  size_t wall_px = 0;
+  for (uint32_t id : leaning_frame.ids) wall_px += id == 1u;
+  EXPECT_EQ(wall_px, leaning_frame.ids.size());
 }
 
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
