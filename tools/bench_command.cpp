@@ -57,6 +57,10 @@ struct Mode {
   bool walks;
 };
 
+// The paths walked between recorded frames: the walks inside the plant (the orbit's recorded
+// frames are a few degrees apart already).
+const std::vector<std::string> kWalkPaths = {"decks", "rack"};
+
 const std::vector<Mode>& modes() {
   static const std::vector<Mode> kModes = {
       {"reference", {"--reference"}, false},
@@ -283,7 +287,7 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
         {"runs", runs},
         {"fps", fps},
         {"walk_fps", walk_fps},
-        {"walk_paths", {"decks", "rack"}},
+        {"walk_paths", kWalkPaths},
         {"walk_modes", json::array()},
         {"image_size", size_text},
         {"orbit_frames", orbit_frames},
@@ -347,9 +351,10 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
                                            path_file.string(), "--fps", std::to_string(fps),
                                            "--size", size_text, "--out", dir.string()};
           args.insert(args.end(), mode.flags.begin(), mode.flags.end());
-          // The walks inside: as an interactive walkthrough moves between recorded frames. The
-          // orbit's frames are a few degrees apart already.
-          if (mode.walks && walk_fps > fps && path_name != "orbit") {
+          // As an interactive walkthrough moves between recorded frames.
+          const bool walked_path =
+              std::find(kWalkPaths.begin(), kWalkPaths.end(), path_name) != kWalkPaths.end();
+          if (mode.walks && walk_fps > fps && walked_path) {
             args.push_back("--walk-fps");
             args.push_back(std::to_string(walk_fps));
           }
