@@ -14,6 +14,9 @@
 //   1.2 (2026-11) the instance, profile, object and string sections may be stored as one zstd
 //       frame each (SectionEntry::stored_bytes, which was reserved and 0 before). Earlier
 //       packages stay valid; a 1.1 view rejects a compressed section (its reserved field).
+//   1.3 (2026-11) ObjectRecord::flags (was reserved and 0): kObjectClosedSurface marks objects
+//       whose mesh triangles bound a solid, so the runtime may cull their back faces. Earlier
+//       packages stay valid (no object is marked); a 1.2 view rejects a marked object.
 #pragma once
 
 #include <bit>
@@ -28,7 +31,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 2;
+inline constexpr uint32_t kMinorVersion = 3;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -251,11 +254,17 @@ struct ObjectRecord {
   uint64_t name_offset;    // in the string pool
   uint64_t db_key_offset;  // in the string pool
   uint32_t db_key_bytes;   // <= kMaxStringBytes; 0 = no database record
-  uint32_t reserved;       // 0
+  uint32_t flags;          // ObjectFlags; a view rejects bits it does not know (0 before 1.3)
   float aabb_min[3];       // of the object's level-0 geometry, relative to origin
   float aabb_max[3];
 };
 static_assert(sizeof(ObjectRecord) == 64);
+
+// ObjectRecord::flags.
+// The object has mesh triangles, and all of them together bound a solid that faces outward
+// (preprocess/closed_surface.h): from an eye outside its box, none of its back faces can show.
+inline constexpr uint32_t kObjectClosedSurface = 1u << 0;
+inline constexpr uint32_t kKnownObjectFlags = kObjectClosedSurface;
 
 struct LayerRecord {
   uint64_t name_offset;  // in the string pool

@@ -89,6 +89,7 @@ PackageSummary summarizePackage(const PackageView& view) {
   for (const pkg::ObjectRecord& o : view.objects()) {
     ++s.layers[o.layer].objects;
     if (o.db_key_bytes > 0) ++s.objects_with_db_key;
+    if (o.flags & pkg::kObjectClosedSurface) ++s.closed_objects;
   }
 
   const VisibilityView& vis = view.visibilityCells();

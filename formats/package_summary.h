@@ -54,6 +54,7 @@ struct PackageSummary {
   std::array<uint64_t, pkg::kPrimitiveTypeCount> instances_by_type{};
   uint64_t instances = 0, profile_points = 0;
   uint64_t objects = 0, objects_with_db_key = 0;
+  uint64_t closed_objects = 0;  // kObjectClosedSurface: back faces may be culled
   struct Layer {
     std::string name;
     uint32_t color_rgba = 0;

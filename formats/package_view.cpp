@@ -295,7 +295,7 @@ void PackageView::validate(Verify verify) {
                                    str(layers_.size()) + " layers)");
     checkString(&o, o.name_offset, o.name_bytes, "object name");
     checkString(&o, o.db_key_offset, o.db_key_bytes, "object database key");
-    if (o.reserved != 0) fail(offsetOf(&o.reserved), "object reserved field is not zero");
+    if ((o.flags & ~kKnownObjectFlags) != 0) fail(offsetOf(&o.flags), "object flags has unknown bits");
     if (!allFinite(o.aabb_min, 3) || !allFinite(o.aabb_max, 3))
       fail(offsetOf(&o.aabb_min), "object bounds are not finite");
   }

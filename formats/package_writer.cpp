@@ -205,8 +205,11 @@ uint32_t PackageStorage::addLayer(const Layer& layer) {
 }
 
 uint32_t PackageStorage::addObject(const ObjectInfo& info, const glm::vec3& aabb_min,
-                                   const glm::vec3& aabb_max) {
+                                   const glm::vec3& aabb_max, uint32_t flags) {
+  if ((flags & ~kKnownObjectFlags) != 0)
+    throw std::invalid_argument("package: object flags has unknown bits");
   ObjectRecord r{};
+  r.flags = flags;
   r.id = info.id;
   r.layer = info.layer;
   r.color_rgba = info.color_rgba;

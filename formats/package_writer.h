@@ -78,7 +78,9 @@ struct PackageStorage {
   // Appends a layer / object record with its strings; returns its index. `aabb_*` are the
   // object's level-0 bounds relative to origin.
   uint32_t addLayer(const Layer& layer);
-  uint32_t addObject(const ObjectInfo& info, const glm::vec3& aabb_min, const glm::vec3& aabb_max);
+  // `flags`: pkg::ObjectFlags (kObjectClosedSurface); throws std::invalid_argument for unknown bits.
+  uint32_t addObject(const ObjectInfo& info, const glm::vec3& aabb_min, const glm::vec3& aabb_max,
+                     uint32_t flags = 0);
 
   // Copies an encoded cluster into the current page, opening a new page when the current one would
   // grow past target_page_bytes; fills record.page, page_offset and encoded_bytes.

@@ -375,7 +375,8 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
     info.layer = object.layer;
     info.db_key = object.db_key;
     info.color_rgba = object.color_rgba;
-    storage.addObject(info, object.bounds_min, object.bounds_max);
+    storage.addObject(info, object.bounds_min, object.bounds_max,
+                      object.closed_surface ? pkg::kObjectClosedSurface : 0u);
   });
   report.shared_positions = snapper.sharedPositions();
   DagPlacement placement = beginDagPlacement(storage);

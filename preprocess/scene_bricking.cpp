@@ -16,6 +16,7 @@
 #include <xxhash.h>
 
 #include "byte_packing.h"
+#include "closed_surface.h"
 #include "file_reader.h"
 #include "format_error.h"
 #include "nurbs_conforming.h"
@@ -30,8 +31,10 @@ namespace {
 
 constexpr uint32_t kSpillMagic = 0x50535754u;    // "TWSP"
 constexpr uint32_t kTrailerMagic = 0x45535754u;  // "TWSE"
-constexpr uint32_t kSpillVersion = 1;
+constexpr uint32_t kSpillVersion = 2;  // 2: ObjectBounds records carry the surface kind
 enum class SpillKind : uint32_t { Brick = 1, Objects = 2, ObjectBounds = 3, Parametrics = 4 };
+// An ObjectBounds record: min and max (vec3 each) and the surface kind (uint32).
+constexpr uint64_t kObjectBoundsRecordBytes = 28;
 
 struct SpillHeader {
   uint32_t magic, version, kind, reserved;
@@ -408,7 +411,7 @@ class BrickingSink : public SceneSink {
       objects_->append(w.bytes.data(), w.bytes.size());
       objects_->countRecord();
       if (objects_->buffered() >= kSideBufferBytes) objects_->flush(false);
-      object_bounds_.push_back({glm::vec3(INFINITY), glm::vec3(-INFINITY)});
+      object_bounds_.push_back({glm::vec3(INFINITY), glm::vec3(-INFINITY), kNoSurface});
       // Estimate: an unordered_map entry costs about a node (32 bytes) plus a bucket (8).
       scene_.stats.object_table_bytes =
           std::max<uint64_t>(scene_.stats.object_table_bytes,
@@ -426,6 +429,14 @@ class BrickingSink : public SceneSink {
   }
 
   void addMesh(const TriangleMesh& mesh, const Transform& t, uint32_t dense) {
+    // An object is a closed solid when each of its mesh pieces is one (closed_surface.h). The
+    // transform must keep the orientation: a mirror turns the surface inside out.
+    uint32_t& surface = object_bounds_[dense].surface;
+    if (surface != kOpenSurface) {
+      const bool solid = glm::determinant(glm::dmat3(t.linear)) > 0.0 &&
+                         checkClosedSurface(mesh).enclosesSolid();
+      surface = solid ? kClosedSurface : kOpenSurface;
+    }
     relative_.resize(mesh.positions.size());
     const double step = options_.position_step_m;
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
@@ -492,9 +503,13 @@ class BrickingSink : public SceneSink {
     buffered_ = 0;
   }
 
+  // Per object: its bounds and what its mesh pieces make (the ObjectBounds spill record).
+  static constexpr uint32_t kNoSurface = 0, kClosedSurface = 1, kOpenSurface = 2;
   struct ObjectBox {
     glm::vec3 min, max;
+    uint32_t surface;
   };
+  static_assert(sizeof(ObjectBox) == kObjectBoundsRecordBytes);
 
   BrickedScene& scene_;
   const BrickingOptions& options_;
@@ -745,7 +760,7 @@ bool verifyBrickedScene(const BrickedScene& scene, bool full) {
       if (!check(b.file, SpillKind::Brick, b.triangle_count, sizeof(TriangleRecord))) return false;
     return check(scene.objects_file, SpillKind::Objects, scene.object_count, 0) &&
            check(scene.object_bounds_file, SpillKind::ObjectBounds, scene.object_count,
-                 2 * sizeof(glm::vec3)) &&
+                 kObjectBoundsRecordBytes) &&
            check(scene.parametrics_file, SpillKind::Parametrics, scene.parametric_count, 0);
   } catch (const FormatError&) {
     return false;
@@ -773,6 +788,9 @@ void forEachObject(const BrickedScene& scene, const std::function<void(const Bri
     }
     object.bounds_min = bounds.readValue<glm::vec3>();
     object.bounds_max = bounds.readValue<glm::vec3>();
+    const auto surface = bounds.readValue<uint32_t>();
+    if (surface > 2) bounds.fail("object surface kind out of range");
+    object.closed_surface = surface == 1;
     fn(object);
   }
   objects.finish();

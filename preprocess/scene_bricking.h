@@ -148,6 +148,9 @@ struct BrickedObject {
   std::string db_key;
   glm::vec3 bounds_min{0.0f};  // relative to the origin; empty (min > max) if no geometry
   glm::vec3 bounds_max{0.0f};
+  // Its mesh geometry bounds a solid seen from outside (closed_surface.h): it has some, and
+  // every mesh piece passed. Back faces of its triangles may then be culled from outside.
+  bool closed_surface = false;
 };
 
 // Streams the objects back in index order. Throws FormatError for damaged files.

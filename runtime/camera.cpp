@@ -45,6 +45,11 @@ double Camera::pixelScale(double viewport_height_px) const {
   return viewport_height_px / (2.0 * std::tan(fov_y_rad * 0.5));
 }
 
+double Camera::nearPlaneReach(double aspect) const {
+  const double t = std::tan(fov_y_rad * 0.5);
+  return near_m * std::sqrt(1.0 + t * t * (1.0 + aspect * aspect));
+}
+
 void Camera::lookAt(const glm::dvec3& target) {
   glm::dvec3 d = target - position;
   double horizontal = std::hypot(d.x, d.y);

@@ -32,6 +32,9 @@ struct Camera {
   // Pixels per unit of (size / distance) at the image centre: viewport_height / (2 tan(fov_y/2)).
   // A sphere of radius r at distance d spans about 2 * r * pixelScale / d pixels.
   double pixelScale(double viewport_height_px) const;
+  // Distance from the eye to the near plane's corners at aspect width / height: surfaces closer
+  // than that may be clipped open, showing what lies behind their front faces.
+  double nearPlaneReach(double aspect) const;
   // Points the camera from its position at `target` (world), keeping Z up.
   void lookAt(const glm::dvec3& target);
 };

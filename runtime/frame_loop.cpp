@@ -119,7 +119,21 @@ void Walkthrough::setOcclusion(OcclusionMode mode) {
 
 void Walkthrough::appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                               std::vector<DrawItem>& items) const {
-  for (uint32_t c : clusters) items.push_back(makeDrawItem(pager_->gpuCluster(c), eye));
+  const auto records = view_->clusters();
+  for (uint32_t c : clusters) {
+    const GpuCluster& g = pager_->gpuCluster(c);
+    DrawItem item = makeDrawItem(g, eye);
+    // Back faces go when the eye is outside the box of the cluster's closed objects, by more
+    // than the near plane's reach (closer, the near plane may cut a surface open) plus how far
+    // the cluster's geometry may stray from those objects: its simplification error and a grid
+    // cell of quantization.
+    if (g.closed && options_.cull_closed_backfaces && !options_.reference) {
+      const double margin = near_reach_m_ + double(records[c].error) + g.cell_m;
+      const glm::dvec3 below = glm::dvec3(g.solid_min) - eye, above = eye - glm::dvec3(g.solid_max);
+      item.cull_back = std::max({below.x, below.y, below.z, above.x, above.y, above.z}) > margin;
+    }
+    items.push_back(item);
+  }
 }
 
 void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats* stats) {
@@ -186,6 +200,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
 
   const double aspect = double(renderer_->width()) / double(renderer_->height());
   const glm::dvec3 eye = camera.position - view_->origin();
+  near_reach_m_ = camera.nearPlaneReach(aspect);
   const std::vector<uint32_t>* draw_list = &reference_clusters_;
   const auto cut_start = Clock::now();
   if (!options_.reference) {
@@ -306,7 +321,10 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     full_order_.assign(draw_list->begin(), draw_list->end());
     full_order_pass1_ = full_order_.size();
   }
-  for (const DrawItem& item : items_) stats.triangles_drawn += item.placement.triangle_count;
+  for (const DrawItem& item : items_) {
+    stats.triangles_drawn += item.placement.triangle_count;
+    if (!item.cull_back) stats.two_sided_triangles += item.placement.triangle_count;
+  }
   stats.nodes_drawn = uint32_t(items_.size());
   const RenderStats render_stats = renderer_->endFrame();
   // Headless runs wait for the GPU anyway, so they report this frame's own GPU time; the window

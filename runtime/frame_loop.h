@@ -41,6 +41,9 @@ struct WalkthroughOptions {
   OcclusionMode occlusion = OcclusionMode::Hzb;  // never applied in reference mode
   HzbOptions hzb;
   bool prefetch = true;          // along the camera's velocity
+  // Cull back faces of mesh clusters made of closed objects when the eye is outside them
+  // (pkg::kObjectClosedSurface; frame_loop.cpp appendItems). Never in reference mode.
+  bool cull_closed_backfaces = true;
   double prefetch_ahead_s = 0.5;  // or the time since the last frame, when longer
   double target_fps = 0.0;       // > 0: adapt tau to hold this frame rate
   double min_tau_px = 0.25, max_tau_px = 64.0;
@@ -126,6 +129,7 @@ class Walkthrough {
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
   std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn
   glm::dvec3 last_eye_{0.0};          // package frame
+  double near_reach_m_ = 0.0;         // this frame's Camera::nearPlaneReach
   glm::mat4 last_rotation_{1.0f}, last_projection_{1.0f};
   double tau_px_ = 1.0;
   uint64_t frame_ = 0;

@@ -20,6 +20,7 @@ struct FrameStats {
   uint32_t nodes_visited = 0;  // groups visited + clusters tested
   uint32_t nodes_drawn = 0;    // mesh clusters drawn
   uint64_t triangles_drawn = 0;
+  uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
   uint32_t culled_frustum = 0;
   uint32_t culled_small = 0;
   // Parametric clusters of the cut (parametric_renderer.h): drawn, or not drawn (mode off).

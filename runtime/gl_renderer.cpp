@@ -51,6 +51,7 @@ struct GlRenderer::Impl {
   // Scratch reused every draw, so steady frames do not allocate.
   std::vector<gl::DrawElementsIndirectCommand> commands;
   std::vector<gl::GpuDrawData> draw_data;
+  std::vector<DrawItem> one_sided, two_sided;  // draw() scratch: items split by culling
 
   // Frame statistics and timer queries.
   RenderStats frame;
@@ -306,16 +307,29 @@ uint64_t GlRenderer::prepareDraws(const GeometryPool& pool, std::span<const Draw
 
 void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items) {
   Impl& s = *impl_;
+  // Culling is GL state, so the one-sided items go in a multi-draw of their own.
+  s.one_sided.clear();
+  s.two_sided.clear();
+  for (const DrawItem& item : items)
+    (item.cull_back || s.options.cull_backfaces ? s.one_sided : s.two_sided).push_back(item);
+  drawBatch(pool, s.one_sided, true);
+  drawBatch(pool, s.two_sided, false);
+}
+
+void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> items,
+                           bool cull_back) {
+  Impl& s = *impl_;
   const uint64_t triangles = prepareDraws(pool, items);  // counted only once all were checked
   if (s.commands.empty()) return;
   s.frame.draws += static_cast<uint32_t>(s.commands.size());
   s.frame.triangles += triangles;
+  if (!cull_back) s.frame.two_sided_triangles += triangles;
 
   s.bindTargetState();
   glEnable(GL_DEPTH_TEST);
   glDepthFunc(GL_GREATER);
   glDisable(GL_BLEND);
-  if (s.options.cull_backfaces) {
+  if (cull_back) {
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
     glFrontFace(GL_CCW);

@@ -9,7 +9,8 @@
 // term using a face normal from screen-space derivatives (the package stores no normals).
 // GPU time is measured with one GL_TIME_ELAPSED query per frame, from beginFrame to endFrame (so
 // no other GL_TIME_ELAPSED query may be active in between), read back without waiting by
-// endFrame or with waiting by waitForGpuMs. No backface culling unless asked (open CAD shells).
+// endFrame or with waiting by waitForGpuMs. Back faces are culled for items marked cull_back, or
+// for all when asked (setCullBackfaces); otherwise CAD shells, often open, show both sides.
 // draw() and beginFrame() set the GL state they need each time (framebuffer, viewport, clip
 // control, depth test, culling) and leave reversed-Z clip control set. Needs a current GL 4.5
 // context for the renderer's whole life.
@@ -31,6 +32,9 @@ struct DrawItem {
   GpuCluster placement;
   glm::vec3 offset_eye{0.0f};  // (grid_origin * cell_m) + origin - eye, world metres, in double then rounded
   float push_m = 0.0f;  // drawDepth only: metres each vertex moves away from the eye (>= 0)
+  // draw only: no back face of the cluster can show (closed solids seen from outside), so its
+  // clockwise triangles are culled. drawDepth draws both sides whatever this says.
+  bool cull_back = false;
 };
 
 // The item for a resident cluster's placement seen from `eye` (package frame, metres): the grid
@@ -53,6 +57,7 @@ struct RendererOptions {
 struct RenderStats {
   uint32_t draws = 0;
   uint64_t triangles = 0;
+  uint64_t two_sided_triangles = 0;  // of triangles: drawn without back-face culling
   double gpu_ms = 0.0;  // of the last finished frame's draw (timer query); 0 before the first
 };
 
@@ -75,8 +80,8 @@ class GlRenderer {
   // Clears colour, ids and depth, and sets the camera (rotation and projection; positions come
   // eye-relative through DrawItem::offset_eye).
   void beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection);
-  // One multi-draw over the pool; may be called several times per frame. Items with no triangles
-  // are skipped. Throws std::out_of_range, drawing nothing, when an item's ranges lie outside the
+  // Multi-draws over the pool (one for the items with cull_back, one for the rest, in their
+  // order); may be called several times per frame. Items with no triangles are skipped. Throws std::out_of_range, drawing nothing, when an item's ranges lie outside the
   // pool's layout.
   void draw(const GeometryPool& pool, std::span<const DrawItem> items);
   // Depth only, for occlusion: draws `items` into `framebuffer` (which must have a 32-bit float
@@ -115,6 +120,7 @@ class GlRenderer {
 
  private:
   uint64_t prepareDraws(const GeometryPool& pool, std::span<const DrawItem> items);
+  void drawBatch(const GeometryPool& pool, std::span<const DrawItem> items, bool cull_back);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

@@ -175,6 +175,28 @@ struct Pager::Impl {
     return FormatError::atByte(view.fileName(), at, "page " + std::to_string(page) + ": " + reason);
   }
 
+  // Sets g.closed and the box of the cluster's objects from the object table. Triangles come
+  // sorted by object (page_codec.h), so each object is looked at once per run.
+  void markClosed(std::span<const uint32_t> triangle_objects, GpuCluster& g) const {
+    const std::span<const pkg::ObjectRecord> objects = view.objects();
+    g.closed = !triangle_objects.empty();
+    glm::vec3 lo(INFINITY), hi(-INFINITY);
+    uint32_t previous = pkg::kNone;
+    for (uint32_t object : triangle_objects) {
+      if (object == previous) continue;
+      previous = object;
+      if (object >= objects.size() || !(objects[object].flags & pkg::kObjectClosedSurface)) {
+        g.closed = false;
+        return;
+      }
+      const pkg::ObjectRecord& o = objects[object];
+      lo = glm::min(lo, glm::vec3(o.aabb_min[0], o.aabb_min[1], o.aabb_min[2]));
+      hi = glm::max(hi, glm::vec3(o.aabb_max[0], o.aabb_max[1], o.aabb_max[2]));
+    }
+    g.solid_min = lo;
+    g.solid_max = hi;
+  }
+
   // Reads and decodes without the lock. Scratch buffers are per caller.
   void load(LoadedPage& out, std::vector<uint8_t>& raw, DecodedCluster& decoded) {
     try {
@@ -208,6 +230,7 @@ struct Pager::Impl {
         g.shift = decoded.shift;
         g.grid_origin = decoded.grid_origin;
         g.cell_m = decoded.cell_m;
+        markClosed(decoded.triangle_objects, g);
         out.clusters.push_back(g);
         up.vertices.insert(up.vertices.end(), decoded.vertices.begin(), decoded.vertices.end());
         for (uint32_t index : decoded.indices) {

@@ -70,6 +70,11 @@ struct GpuCluster {
   uint32_t shift = 0;           // quantization: position = (grid_origin + q) * cell_m
   glm::ivec3 grid_origin{0};
   double cell_m = 0.0;
+  // Every triangle belongs to an object marked pkg::kObjectClosedSurface, and solid_min/max
+  // (package frame) hold all those objects' boxes: from an eye outside that box, no back face
+  // of the cluster can show, so the renderer may cull them (frame_loop.cpp).
+  bool closed = false;
+  glm::vec3 solid_min{0.0f}, solid_max{0.0f};
 };
 
 // One page's data for the renderer to copy into the pool at the given offsets (contiguous per

@@ -527,6 +527,10 @@ TEST(Package, SpecificErrorsNameTheOffset) {
                  int64_t(objects.offset + 64 + 4));
 
   b = good;
+  b.patchRecord<uint32_t>(SectionType::Objects, 1, offsetof(pkg::ObjectRecord, flags), 2u);
+  expectRejected(b.data, "object flags has unknown bits", int64_t(objects.offset + 64 + 36));
+
+  b = good;
   b.patchRecord<uint64_t>(SectionType::Objects, 2, offsetof(pkg::ObjectRecord, name_offset), 1000);
   expectRejected(b.data, "object name [1000, +4) is not inside the string pool",
                  int64_t(objects.offset + 128));

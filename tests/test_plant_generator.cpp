@@ -9,6 +9,8 @@
 #include <set>
 #include <string>
 
+#include "closed_surface.h"
+#include "nurbs_conforming.h"
 #include "plant_generator.h"
 #include "project_database.h"
 #include "scene_stats.h"
@@ -361,6 +363,15 @@ void expectWatertightHull(uint64_t target) {
                                    << report.non_manifold_edges << " rejected "
                                    << report.rejected_faces << " degenerate "
                                    << report.degenerate_faces;
+
+  // As the preprocessor tessellates it (conforming across patches), it bounds a solid seen from
+  // outside, so the runtime may cull its back faces.
+  TriangleMesh conforming;
+  tessellateNurbsConforming(hull, options.tolerance, conforming);
+  const ClosedSurfaceReport closed = checkClosedSurface(conforming);
+  EXPECT_TRUE(closed.enclosesSolid())
+      << "skipped " << closed.skipped << " unpaired edges " << closed.unpaired_edges
+      << " pieces " << closed.components << " inward " << closed.inward_components;
 }
 
 TEST(PlantGenerator, ShipHullIsWatertight) { expectWatertightHull(2'000'000); }

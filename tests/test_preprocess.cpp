@@ -190,7 +190,8 @@ TEST(Preprocess, StreamedPackageEqualsTheInMemoryAssembly) {
     info.layer = object.layer;
     info.db_key = object.db_key;
     info.color_rgba = object.color_rgba;
-    storage.addObject(info, object.bounds_min, object.bounds_max);
+    storage.addObject(info, object.bounds_min, object.bounds_max,
+                      object.closed_surface ? pkg::kObjectClosedSurface : 0u);
   });
   addDagToPackage(dag, storage);
   std::vector<ParametricItem> items;

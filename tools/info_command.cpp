@@ -170,6 +170,7 @@ nlohmann::json packageToJson(const PackageSummary& s) {
       {"total", s.instances}, {"by_type", prims}, {"profile_points", s.profile_points}};
   j["objects"] = s.objects;
   j["objects_with_db_key"] = s.objects_with_db_key;
+  j["closed_objects"] = s.closed_objects;
   nlohmann::json layers = nlohmann::json::array();
   for (const auto& layer : s.layers)
     layers.push_back({{"name", layer.name}, {"objects", layer.objects},
@@ -249,8 +250,8 @@ void printPackage(const PackageSummary& s, double seconds) {
         std::printf(" %s %llu", packagePrimitiveTypeName(t), ull(s.instances_by_type[t]));
     std::printf("\n");
   }
-  std::printf("objects     %llu (%llu with a database key)\n", ull(s.objects),
-              ull(s.objects_with_db_key));
+  std::printf("objects     %llu (%llu with a database key, %llu closed solids)\n", ull(s.objects),
+              ull(s.objects_with_db_key), ull(s.closed_objects));
   std::printf("layers      %zu\n", s.layers.size());
   for (const auto& layer : s.layers)
     std::printf("  %-24s %10llu objects\n", layer.name.c_str(), ull(layer.objects));

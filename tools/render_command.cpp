@@ -51,6 +51,7 @@ struct RenderArgs {
   uint32_t evict_after = 30;
   bool reference = false;
   bool no_prefetch = false;
+  bool two_sided_meshes = false;
   bool no_frustum = false;
   std::string occlusion = "hzb";
   std::string parametrics = "auto";
@@ -101,6 +102,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.target_fps = args.target_fps;
   options.reference = args.reference;
   options.prefetch = !args.no_prefetch;
+  options.cull_closed_backfaces = !args.two_sided_meshes;
   options.frustum_cull = !args.no_frustum;
   options.occlusion = parseOcclusionMode(args.occlusion);
   options.parametrics = parseParametricMode(args.parametrics);
@@ -332,6 +334,8 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
                 "tessellated at the preprocessor's 2 mm unless --parametrics or "
                 "--parametric-tolerance say otherwise)");
   cmd->add_flag("--no-prefetch", args->no_prefetch, "Do not prefetch along the camera's velocity");
+  cmd->add_flag("--two-sided-meshes", args->two_sided_meshes,
+                "Draw both sides of closed mesh objects (no back-face culling)");
   cmd->add_flag("--no-frustum", args->no_frustum,
                 "No frustum culling: LOD alone (benchmarks measure each technique's share)");
   cmd->add_option("--parametrics", args->parametrics,

@@ -37,8 +37,8 @@ class MeshBuilder {
       uint32_t lo = ring_start[j], hi = ring_start[j + 1];
       for (uint32_t k = 0; k < segments; ++k) {
         uint32_t k1 = (k + 1) % segments;
-        if (lo_point) {
-          tri(lo, hi + k, hi + k1);
+        if (lo_point) {  // a disc facing down the axis, as the side faces away from it
+          tri(lo, hi + k1, hi + k);
         } else if (hi_point) {
           tri(lo + k, lo + k1, hi);
         } else {

@@ -163,6 +163,12 @@ SceneObject buildHull(uint32_t hull_index, const glm::dvec3& deck_origin, float 
         set.patches.push_back(std::move(patch));
       }
   }
+  // The grids above run so that each patch's u x v points into the hull. Swapping u and v turns
+  // every patch the same way, outward, so the closed shell faces out and renderers may cull its
+  // back faces (preprocess/closed_surface.h).
+  for (NurbsPatch& patch : set.patches)
+    for (int j = 0; j < 4; ++j)
+      for (int i = j + 1; i < 4; ++i) std::swap(patch.control_points[j * 4 + i], patch.control_points[i * 4 + j]);
   hull.geometry = std::move(set);
   return hull;
 }
