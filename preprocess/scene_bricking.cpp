@@ -33,8 +33,10 @@ constexpr uint32_t kSpillMagic = 0x50535754u;    // "TWSP"
 constexpr uint32_t kTrailerMagic = 0x45535754u;  // "TWSE"
 constexpr uint32_t kSpillVersion = 2;  // 2: ObjectBounds records carry the surface kind
 enum class SpillKind : uint32_t { Brick = 1, Objects = 2, ObjectBounds = 3, Parametrics = 4 };
-// An ObjectBounds record: min and max (vec3 each) and the surface kind (uint32).
+// An ObjectBounds record: min and max (vec3 each) and the surface kind (uint32): what the
+// object's mesh pieces make (closed_surface.h); none for objects without mesh geometry.
 constexpr uint64_t kObjectBoundsRecordBytes = 28;
+constexpr uint32_t kNoSurface = 0, kClosedSurface = 1, kOpenSurface = 2;
 
 struct SpillHeader {
   uint32_t magic, version, kind, reserved;
@@ -504,7 +506,6 @@ class BrickingSink : public SceneSink {
   }
 
   // Per object: its bounds and what its mesh pieces make (the ObjectBounds spill record).
-  static constexpr uint32_t kNoSurface = 0, kClosedSurface = 1, kOpenSurface = 2;
   struct ObjectBox {
     glm::vec3 min, max;
     uint32_t surface;
@@ -789,8 +790,8 @@ void forEachObject(const BrickedScene& scene, const std::function<void(const Bri
     object.bounds_min = bounds.readValue<glm::vec3>();
     object.bounds_max = bounds.readValue<glm::vec3>();
     const auto surface = bounds.readValue<uint32_t>();
-    if (surface > 2) bounds.fail("object surface kind out of range");
-    object.closed_surface = surface == 1;
+    if (surface > kOpenSurface) bounds.fail("object surface kind out of range");
+    object.closed_surface = surface == kClosedSurface;
     fn(object);
   }
   objects.finish();
