@@ -20,7 +20,7 @@ namespace {
 
 constexpr GLuint kVertexBinding = 0;    // the one vertex buffer binding of the VAO
 constexpr GLuint kPositionAttrib = 0;   // uvec3 q, 16-bit grid units
-constexpr GLuint kNormalAttrib = 1;     // vec2 octahedral normal, snorm8 (unused by the shaders)
+constexpr GLuint kTagAttrib = 1;        // uint: a triangle of the vertex's object (vertex_object_tags.h)
 
 // First storage of each buffer, in elements (a few MiB), before any growth.
 constexpr uint64_t kInitialElements = 1u << 18;
@@ -73,10 +73,10 @@ GeometryPool::GeometryPool(const PoolLayout& layout) : layout_(layout) {
   glVertexArrayAttribIFormat(vao_, kPositionAttrib, 3, GL_UNSIGNED_SHORT,
                              offsetof(pkg::EncodedVertex, q));
   glVertexArrayAttribBinding(vao_, kPositionAttrib, kVertexBinding);
-  glEnableVertexArrayAttrib(vao_, kNormalAttrib);
-  glVertexArrayAttribFormat(vao_, kNormalAttrib, 2, GL_BYTE, GL_TRUE,
-                            offsetof(pkg::EncodedVertex, oct));
-  glVertexArrayAttribBinding(vao_, kNormalAttrib, kVertexBinding);
+  glEnableVertexArrayAttrib(vao_, kTagAttrib);  // the normal's two bytes, as one 16-bit word
+  glVertexArrayAttribIFormat(vao_, kTagAttrib, 1, GL_UNSIGNED_SHORT,
+                             offsetof(pkg::EncodedVertex, oct));
+  glVertexArrayAttribBinding(vao_, kTagAttrib, kVertexBinding);
   glVertexArrayElementBuffer(vao_, indices_);
 }
 

@@ -1,5 +1,5 @@
-// The GL 4.5 core mesh renderer: offscreen targets, the mesh program, one multi-draw per call,
-// and GPU timing. The contract is in gl_renderer.h; the shaders and the per-draw struct they share
+// The GL 4.5 core mesh renderer: offscreen targets, the mesh programs, one multi-draw per
+// culling state and program, and GPU timing. The contract is in gl_renderer.h; the shaders and the per-draw struct they share
 // with this file are in gl_shaders.h.
 #include "gl_renderer.h"
 
@@ -7,6 +7,7 @@
 #include <GL/glcorearb.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstring>
@@ -42,7 +43,8 @@ GLuint buildProgram(const std::string& vertex_source, const std::string& fragmen
 struct GlRenderer::Impl {
   RendererOptions options;
   GLuint fbo = 0, color = 0, ids = 0, depth = 0;
-  GLuint program = 0;
+  GLuint program = 0;               // objects flat from the vertices (vertex_object_tags.h)
+  GLuint per_triangle_program = 0;  // clusters with GpuCluster::object_per_triangle
   GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
   uint32_t object_color_count = 0;
@@ -51,7 +53,8 @@ struct GlRenderer::Impl {
   // Scratch reused every draw, so steady frames do not allocate.
   std::vector<gl::DrawElementsIndirectCommand> commands;
   std::vector<gl::GpuDrawData> draw_data;
-  std::vector<DrawItem> one_sided, two_sided;  // draw() scratch: items split by culling
+  // draw() scratch: items split by culling and by program.
+  std::array<std::vector<DrawItem>, 4> batches;
 
   // Frame statistics and timer queries.
   RenderStats frame;
@@ -161,6 +164,7 @@ struct GlRenderer::Impl {
     glDeleteBuffers(1, &draw_data_buffer);
     glDeleteBuffers(1, &color_buffer);
     glDeleteProgram(program);
+    glDeleteProgram(per_triangle_program);
     glDeleteProgram(depth_program);
     deleteTargets();
   }
@@ -180,7 +184,9 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
   while (glGetError() != GL_NO_ERROR) {
   }  // errors left by others must not be blamed on us
   s.createTargets(options.width, options.height);
-  s.program = buildProgram(gl::meshVertexShader(), gl::meshFragmentShader(), "mesh");
+  s.program = buildProgram(gl::meshVertexShader(), gl::meshFragmentShader(false), "mesh");
+  s.per_triangle_program = buildProgram(gl::meshVertexShader(), gl::meshFragmentShader(true),
+                                        "mesh, objects per triangle");
   s.depth_program =
       buildProgram(gl::occluderVertexShader(), gl::occluderFragmentShader(), "occluder");
   glCreateBuffers(1, &s.indirect_buffer);
@@ -189,7 +195,8 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
   // Never bind an empty store: keep one (unused) entry until colours are set.
   const uint32_t none = 0;
   glNamedBufferData(s.color_buffer, sizeof none, &none, GL_STATIC_DRAW);
-  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, 0u);
+  for (GLuint program : {s.program, s.per_triangle_program})
+    glProgramUniform1ui(program, gl::kObjectColorCountLocation, 0u);
   glCreateQueries(GL_TIME_ELAPSED, kQueryRing, s.queries);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
     char message[96];
@@ -225,7 +232,8 @@ void GlRenderer::setObjectColors(std::span<const uint32_t> rgba) {
     s.object_color_count = static_cast<uint32_t>(
         std::min<size_t>(rgba.size(), std::numeric_limits<uint32_t>::max()));
   }
-  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, s.object_color_count);
+  for (GLuint program : {s.program, s.per_triangle_program})
+    glProgramUniform1ui(program, gl::kObjectColorCountLocation, s.object_color_count);
 }
 
 void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection) {
@@ -250,8 +258,9 @@ void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& pro
 
   const glm::mat4 view_projection = projection * view_rotation;
   s.view_projection = view_projection;
-  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
-                            &view_projection[0][0]);
+  for (GLuint program : {s.program, s.per_triangle_program})
+    glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                              &view_projection[0][0]);
   glProgramUniformMatrix4fv(s.depth_program, gl::kViewProjectionLocation, 1, GL_FALSE,
                             &view_projection[0][0]);
 }
@@ -307,17 +316,17 @@ uint64_t GlRenderer::prepareDraws(const GeometryPool& pool, std::span<const Draw
 
 void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items) {
   Impl& s = *impl_;
-  // Culling is GL state, so the one-sided items go in a multi-draw of their own.
-  s.one_sided.clear();
-  s.two_sided.clear();
-  for (const DrawItem& item : items)
-    (item.cull_back || s.options.cull_backfaces ? s.one_sided : s.two_sided).push_back(item);
-  drawBatch(pool, s.one_sided, true);
-  drawBatch(pool, s.two_sided, false);
+  // Culling and the program are GL state, so each combination gets a multi-draw of its own.
+  for (auto& batch : s.batches) batch.clear();
+  for (const DrawItem& item : items) {
+    const bool cull = item.cull_back || s.options.cull_backfaces;
+    s.batches[(cull ? 0 : 1) + (item.placement.object_per_triangle ? 2 : 0)].push_back(item);
+  }
+  for (size_t b = 0; b < s.batches.size(); ++b) drawBatch(pool, s.batches[b], b % 2 == 0, b >= 2);
 }
 
 void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> items,
-                           bool cull_back) {
+                           bool cull_back, bool object_per_triangle) {
   Impl& s = *impl_;
   const uint64_t triangles = prepareDraws(pool, items);  // counted only once all were checked
   if (s.commands.empty()) return;
@@ -336,7 +345,7 @@ void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> i
   } else {
     glDisable(GL_CULL_FACE);
   }
-  glUseProgram(s.program);
+  glUseProgram(object_per_triangle ? s.per_triangle_program : s.program);
   glBindVertexArray(pool.vertexArray());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kDrawDataBinding, s.draw_data_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kTriangleObjectBinding,

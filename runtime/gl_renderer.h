@@ -80,9 +80,10 @@ class GlRenderer {
   // Clears colour, ids and depth, and sets the camera (rotation and projection; positions come
   // eye-relative through DrawItem::offset_eye).
   void beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection);
-  // Multi-draws over the pool (one for the items with cull_back, one for the rest, in their
-  // order); may be called several times per frame. Items with no triangles are skipped. Throws std::out_of_range, drawing nothing, when an item's ranges lie outside the
-  // pool's layout.
+  // Multi-draws over the pool, one per combination of culling (cull_back or not) and program
+  // (placement.object_per_triangle or not), items in their order within each; may be called
+  // several times per frame. Items with no triangles are skipped. Throws std::out_of_range,
+  // drawing nothing, when an item's ranges lie outside the pool's layout.
   void draw(const GeometryPool& pool, std::span<const DrawItem> items);
   // Depth only, for occlusion: draws `items` into `framebuffer` (which must have a 32-bit float
   // depth attachment of the renderer's size, and may have no colour) with the camera of the last
@@ -120,7 +121,8 @@ class GlRenderer {
 
  private:
   uint64_t prepareDraws(const GeometryPool& pool, std::span<const DrawItem> items);
-  void drawBatch(const GeometryPool& pool, std::span<const DrawItem> items, bool cull_back);
+  void drawBatch(const GeometryPool& pool, std::span<const DrawItem> items, bool cull_back,
+                 bool object_per_triangle);
 
   struct Impl;
   std::unique_ptr<Impl> impl_;

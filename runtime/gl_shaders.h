@@ -74,39 +74,29 @@ layout(location = 0) uniform mat4 view_projection;
 )";
 }
 
-inline std::string meshVertexShader() {
-  return clusterVertexPreamble() + R"(
-// Positions arrive as 16-bit grid units; the cluster's eye-relative origin and cell size come
-// from the per-draw record, so everything here stays small and float-safe far from the origin.
-out vec3 pos_eye;
-flat out uint first_triangle;
-void main() {
-  GpuDrawData d = draws[gl_DrawIDARB];
-  pos_eye = d.offset_eye + vec3(q) * d.cell_m;
-  first_triangle = d.first_triangle;
-  gl_Position = view_projection * vec4(pos_eye, 1.0);
-}
-)";
-}
-
 // The colour and lighting every surface pass shares (meshes, parametric impostors and
 // tessellated parametrics), so the same object looks the same whichever way it is drawn: colour
 // from the object table (grey when absent), sky/ground hemispheric plus sun and head light,
 // two-sided (the normal is turned toward the eye, because CAD surfaces are often open).
-// Needs `object_colors` (binding 2) and the `object_color_count` uniform (location 1) declared
-// by the including shader's preamble below.
-inline std::string shadingGlsl() {
+// The object colour part (objectColorGlsl) also serves vertex stages that hand the colour to
+// the fragments flat.
+inline std::string objectColorGlsl() {
   return R"(
 layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
 layout(location = 1) uniform uint object_color_count;
-const vec3 kSunDir = normalize(vec3(0.35, 0.25, 0.90));  // world (eye-relative axes are world axes)
-const vec3 kSky = vec3(0.80, 0.86, 0.95);
-const vec3 kGround = vec3(0.30, 0.27, 0.24);
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
 vec4 objectBaseColor(uint object) {
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
   return rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
 }
+)";
+}
+
+inline std::string shadingGlsl() {
+  return objectColorGlsl() + R"(
+const vec3 kSunDir = normalize(vec3(0.35, 0.25, 0.90));  // world (eye-relative axes are world axes)
+const vec3 kSky = vec3(0.80, 0.86, 0.95);
+const vec3 kGround = vec3(0.30, 0.27, 0.24);
 // The face normal of the triangle under the fragment, from screen-space derivatives of its
 // eye-relative position (facing the eye where they vanish: lines, points, slivers).
 vec3 facetNormal(vec3 pos_eye) {
@@ -130,20 +120,66 @@ vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
 )";
 }
 
-inline std::string meshFragmentShader() {
+// The per-triangle object table of the pool, read by the mesh pass's two stages.
+inline constexpr const char* kTriangleObjectsGlsl = R"(
+layout(std430, binding = 1) readonly buffer TriangleObjects { uint tri_objects[]; };
+)";
+
+inline std::string meshVertexShader() {
+  return clusterVertexPreamble() + kTriangleObjectsGlsl + objectColorGlsl() + R"(
+// Positions arrive as 16-bit grid units; the cluster's eye-relative origin and cell size come
+// from the per-draw record, so everything here stays small and float-safe far from the origin.
+// The tag names a triangle of this vertex's object (vertex_object_tags.h): its object and colour
+// go to the fragments flat, from each triangle's last vertex. 0xffff: the vertex is shared by
+// objects, and the fragments look their triangle up themselves (object_plus_one = 0).
+layout(location = 1) in uint tag;
+out vec3 pos_eye;
+flat out uint first_triangle;
+flat out uint object_plus_one;
+flat out vec4 base_color;
+void main() {
+  GpuDrawData d = draws[gl_DrawIDARB];
+  pos_eye = d.offset_eye + vec3(q) * d.cell_m;
+  first_triangle = d.first_triangle;
+  object_plus_one = 0u;
+  base_color = vec4(0.0);
+  if (tag != 0xffffu) {
+    uint object = tri_objects[d.first_triangle + tag];
+    object_plus_one = object + 1u;
+    base_color = objectBaseColor(object);
+  }
+  gl_Position = view_projection * vec4(pos_eye, 1.0);
+}
+)";
+}
+
+// per_triangle: the variant for clusters with a triangle that has no corner of its own object
+// (GpuCluster::object_per_triangle); the other takes object and colour flat, with no table read.
+inline std::string meshFragmentShader(bool per_triangle) {
   return std::string(R"(#version 450 core
-// Object from the per-triangle pool (gl_PrimitiveID restarts at 0 for every draw of a
-// multi-draw) and a face normal from screen-space derivatives (the package stores none).
+// Object and colour flat from the vertex stage, or, for a triangle whose corners are all shared
+// by objects, from the per-triangle pool (gl_PrimitiveID restarts at 0 for every draw of a
+// multi-draw); a face normal from screen-space derivatives (the package stores none).
+)") + (per_triangle ? "#define TW_OBJECT_PER_TRIANGLE 1\n" : "") + R"(
 in vec3 pos_eye;
 flat in uint first_triangle;
-layout(std430, binding = 1) readonly buffer TriangleObjects { uint tri_objects[]; };
+flat in uint object_plus_one;
+flat in vec4 base_color;
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
-)") + shadingGlsl() + R"(
+)" + kTriangleObjectsGlsl + shadingGlsl() + R"(
 void main() {
-  uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
-  out_color = shadeSurface(objectBaseColor(object), facetNormal(pos_eye), pos_eye);
-  out_id = object + 1u;
+  uint id = object_plus_one;
+  vec4 base = base_color;
+#ifdef TW_OBJECT_PER_TRIANGLE
+  if (id == 0u) {
+    uint object = tri_objects[first_triangle + uint(gl_PrimitiveID)];
+    id = object + 1u;
+    base = objectBaseColor(object);
+  }
+#endif
+  out_color = shadeSurface(base, facetNormal(pos_eye), pos_eye);
+  out_id = id;
 }
 )";
 }

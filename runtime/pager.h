@@ -75,6 +75,9 @@ struct GpuCluster {
   // of the cluster can show, so the renderer may cull them (frame_loop.cpp).
   bool closed = false;
   glm::vec3 solid_min{0.0f}, solid_max{0.0f};
+  // Some triangle has no corner of its own object (vertex_object_tags.h), so the cluster is drawn
+  // with the program whose fragments look their object up per triangle.
+  bool object_per_triangle = false;
 };
 
 // One page's data for the renderer to copy into the pool at the given offsets (contiguous per

@@ -323,7 +323,7 @@ void main() {
 // anchor, one object index and one normal (the surface's own) per vertex; shaded by
 // parametricSmoothFragmentShader like the instances below.
 inline std::string parametricMeshVertexShader() {
-  return R"(#version 450 core
+  return std::string(R"(#version 450 core
 layout(location = 0) in vec3 position;  // metres from the cluster anchor
 layout(location = 1) in uint object;
 layout(location = 2) in vec3 normal;    // world, unit or zero
@@ -332,10 +332,13 @@ layout(location = 6) uniform vec3 anchor_eye;
 out vec3 pos_eye;
 out vec3 v_normal;
 flat out uint v_object;
+flat out vec4 v_base;
+)") + objectColorGlsl() + R"(
 void main() {
   pos_eye = anchor_eye + position;
   v_normal = normal;
   v_object = object;
+  v_base = objectBaseColor(object);
   gl_Position = view_projection * vec4(pos_eye, 1.0);
 }
 )";
@@ -347,7 +350,7 @@ void main() {
 // flat faces (caps, boxes), lines and points carry a zero normal and are faceted like the mesh
 // pass (derivative normals; a line faces the eye).
 inline std::string parametricSmoothVertexShader() {
-  return R"(#version 450 core
+  return std::string(R"(#version 450 core
 layout(location = 0) in vec3 position;  // metres from the eye
 layout(location = 1) in uint object;
 layout(location = 2) in vec3 normal;    // world, unit or zero
@@ -355,10 +358,13 @@ layout(location = 0) uniform mat4 view_projection;
 out vec3 pos_eye;
 out vec3 v_normal;
 flat out uint v_object;
+flat out vec4 v_base;
+)") + objectColorGlsl() + R"(
 void main() {
   pos_eye = position;
   v_normal = normal;
   v_object = object;
+  v_base = objectBaseColor(object);
   gl_Position = view_projection * vec4(pos_eye, 1.0);
 }
 )";
@@ -369,6 +375,7 @@ inline std::string parametricSmoothFragmentShader() {
 in vec3 pos_eye;
 in vec3 v_normal;
 flat in uint v_object;
+flat in vec4 v_base;  // the object's colour, looked up once per vertex
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
@@ -382,7 +389,7 @@ void main() {
   float len = length(v_normal);
   vec3 n = facet;
   if (len > 0.25) n = dot(v_normal, facet) < 0.0 ? -v_normal / len : v_normal / len;
-  out_color = shadeSeenSide(objectBaseColor(v_object), n, pos_eye);
+  out_color = shadeSeenSide(v_base, n, pos_eye);
   out_id = v_object + 1u;
 }
 )";

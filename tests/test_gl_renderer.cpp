@@ -25,6 +25,7 @@
 #include "pager.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
+#include "vertex_object_tags.h"
 
 namespace tw {
 namespace {
@@ -96,6 +97,10 @@ class PoolBuilder {
     upload_.indices.insert(upload_.indices.end(), indices.begin(), indices.end());
     upload_.triangle_objects.insert(upload_.triangle_objects.end(), objects.begin(),
                                     objects.end());
+    c.object_per_triangle =
+        tagVertexObjects(std::span(upload_.vertices).subspan(c.first_vertex),
+                         std::span(upload_.indices).subspan(c.first_index),
+                         std::span<const uint32_t>(upload_.triangle_objects).subspan(c.first_triangle)) > 0;
     clusters_.push_back(c);
     return clusters_.size() - 1;
   }
@@ -272,6 +277,45 @@ TEST_F(GlRendererTest, ObjectIdsFollowTrianglesAcrossClustersOfOneMultiDraw) {
   EXPECT_EQ(idAt(0.0, -3.5), 12u);
   EXPECT_EQ(idAt(-4.0, -3.5), 3u);
   EXPECT_EQ(idAt(2.0, 2.0), 0u);
+}
+
+TEST_F(GlRendererTest, TriangleWhoseVerticesObjectsShareTakesItsOwnObjectAndColour) {
+  // A middle triangle of object 4 whose three corners are each shared with an outer triangle of
+  // object 6: no corner is its own, so its fragments look its object up per triangle, while the
+  // outer ones take theirs flat from their own vertex (vertex_object_tags.h).
+  PoolBuilder builder;
+  auto at = [](double y, double z) { return glm::dvec3(10.0, y, z); };
+  const std::vector<glm::dvec3> world = {at(2.0, -1.5), at(-2.0, -1.5), at(0.0, 2.0),  // middle
+                                         at(0.0, -4.0), at(-3.5, 1.5), at(3.5, 1.5)};   // outer
+  // Counter-clockwise on screen (screen x is -y): the middle, then one outer triangle per edge.
+  builder.addCluster(world, {0, 1, 2, 0, 3, 1, 1, 4, 2, 2, 5, 0}, {4, 6, 6, 6});
+  std::vector<pkg::EncodedVertex> tagged(6);
+  std::vector<uint16_t> indices = {0, 1, 2, 0, 3, 1, 1, 4, 2, 2, 5, 0};
+  ASSERT_EQ(tagVertexObjects(tagged, indices, std::vector<uint32_t>{4, 6, 6, 6}), 1u)
+      << "the middle triangle must need the per-triangle look-up";
+  auto pool = builder.makePool();
+  GlRenderer renderer(smallOptions());
+  std::vector<uint32_t> colors(7, 0u);
+  colors[4] = 0xff0000ffu;  // red
+  colors[6] = 0xffff0000u;  // blue
+  renderer.setObjectColors(colors);
+  TestView view;
+  Frame frame = render(renderer, *pool, view, builder.items(view.eye));
+  auto pixelAt = [&](double y, double z) {
+    glm::dvec2 p = view.project({10.0, y, z});
+    return std::pair(frame.id(static_cast<int>(p.x), static_cast<int>(p.y)),
+                     frame.pixel(static_cast<int>(p.x), static_cast<int>(p.y)));
+  };
+  const auto [middle_id, middle] = pixelAt(0.0, -0.3);
+  EXPECT_EQ(middle_id, 5u);
+  EXPECT_GT(middle[0], 100);
+  EXPECT_LT(middle[2], 10);
+  for (const glm::dvec2& outer : {glm::dvec2(0.0, -2.5), glm::dvec2(-2.0, 1.0), glm::dvec2(2.0, 1.0)}) {
+    const auto [id, rgba] = pixelAt(outer.x, outer.y);
+    EXPECT_EQ(id, 7u) << outer.x << ", " << outer.y;
+    EXPECT_LT(rgba[0], 10);
+    EXPECT_GT(rgba[2], 100);
+  }
 }
 
 TEST_F(GlRendererTest, NearerSurfaceWinsWhateverTheDrawOrder) {

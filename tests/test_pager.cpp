@@ -24,6 +24,7 @@
 #include "pager.h"
 #include "preprocess_driver.h"
 #include "test_support.h"
+#include "vertex_object_tags.h"
 
 namespace tw {
 namespace {
@@ -138,6 +139,10 @@ std::vector<ExpectedPage> expectedPages(const PackageView& view) {
       DecodedCluster d;
       view.decodeCluster(c, raw, d);
       pages[p].bytes += d.vertices.size() * 8 + d.indices.size() * 2 + d.triangle_objects.size() * 4;
+      // What the GPU receives: the decode with its vertices tagged by object.
+      std::vector<uint16_t> indices(d.indices.begin(), d.indices.end());
+      tagVertexObjects(d.vertices, indices, d.triangle_objects);
+      d.indices.assign(indices.begin(), indices.end());
       pages[p].decoded.push_back(std::move(d));
     }
   }
