@@ -2,11 +2,13 @@
 //
 // Renders into its own framebuffer: RGBA8 colour, R32UI object ids (object index + 1, 0 = no
 // geometry), 32-bit float depth, reversed Z (camera.h). Mesh clusters come from the GeometryPool
-// and are drawn with one glMultiDrawElementsIndirect: per-draw data (eye-relative offset of the
+// and are drawn with glMultiDrawElementsIndirect: per-draw data (eye-relative offset of the
 // cluster's grid origin, cell size, first triangle in the object pool) sits in an SSBO indexed by
-// gl_DrawIDARB; the fragment shader finds the triangle's object through gl_PrimitiveID, colours it
-// with the colour setObjectColors gave that object (grey when 0 or absent), and lights it with a directional plus hemispheric
-// term using a face normal from screen-space derivatives (the package stores no normals).
+// gl_DrawIDARB; the vertex shader finds each triangle's object through the vertex's tag
+// (vertex_object_tags.h; the fragments of the rare untagged triangle through gl_PrimitiveID),
+// with the colour setObjectColors gave that object (grey when 0 or absent), and the fragment
+// shader lights it with a directional plus hemispheric term using a face normal from
+// screen-space derivatives (the package stores no normals).
 // GPU time is measured with one GL_TIME_ELAPSED query per frame, from beginFrame to endFrame (so
 // no other GL_TIME_ELAPSED query may be active in between), read back without waiting by
 // endFrame or with waiting by waitForGpuMs. Back faces are culled for items marked cull_back, or
