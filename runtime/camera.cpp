@@ -45,9 +45,13 @@ double Camera::pixelScale(double viewport_height_px) const {
   return viewport_height_px / (2.0 * std::tan(fov_y_rad * 0.5));
 }
 
+double nearPlaneReach(double near_m, double half_width, double half_height) {
+  return near_m * std::sqrt(1.0 + half_width * half_width + half_height * half_height);
+}
+
 double Camera::nearPlaneReach(double aspect) const {
   const double t = std::tan(fov_y_rad * 0.5);
-  return near_m * std::sqrt(1.0 + t * t * (1.0 + aspect * aspect));
+  return tw::nearPlaneReach(near_m, t * aspect, t);
 }
 
 void Camera::lookAt(const glm::dvec3& target) {

@@ -13,6 +13,11 @@
 
 namespace tw {
 
+// Distance from the eye to the corners of a near plane at near_m whose half width and half
+// height at unit distance are given: surfaces closer than that may be clipped open. Camera's
+// own, and the parametric passes' from their projection matrix, are this one formula.
+double nearPlaneReach(double near_m, double half_width, double half_height);
+
 struct Camera {
   glm::dvec3 position{0.0};  // world metres (package users subtract PackageHeader::origin)
   double yaw_rad = 0.0;      // about +Z; 0 looks along +X, pi/2 along +Y

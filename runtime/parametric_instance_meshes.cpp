@@ -17,6 +17,7 @@
 #include <utility>
 #include <vector>
 
+#include "camera.h"
 #include "gl_program.h"
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
@@ -767,9 +768,10 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
   const double near_m = std::max(view.near_m, 1e-6);
   // How far from the eye the near plane reaches (its corners): an eye closer than that to a
   // surface may see it clipped open, so back faces are kept there.
+  // The rows' lengths are the reciprocals of the frustum's half extents at unit distance.
   const float near_reach = static_cast<float>(
-      near_m * std::sqrt(1.0 + 1.0 / std::max(double(glm::dot(glm::vec3(row_x), glm::vec3(row_x))), 1e-12) +
-                         1.0 / std::max(double(glm::dot(glm::vec3(row_y), glm::vec3(row_y))), 1e-12)));
+      nearPlaneReach(near_m, 1.0 / std::max(double(glm::length(glm::vec3(row_x))), 1e-6),
+                     1.0 / std::max(double(glm::length(glm::vec3(row_y))), 1e-6)));
 
   s.vertices.clear();
   for (auto& list : s.indices) list.clear();
