@@ -1,6 +1,6 @@
 // The GL 4.5 core mesh renderer: offscreen targets, the mesh programs, one multi-draw per
-// culling state and program, and GPU timing. The contract is in gl_renderer.h; the shaders and the per-draw struct they share
-// with this file are in gl_shaders.h.
+// culling state and program, and GPU timing. The contract is in gl_renderer.h; the shaders and
+// the per-draw struct they share with this file are in gl_shaders.h.
 #include "gl_renderer.h"
 
 #define GL_GLEXT_PROTOTYPES 1

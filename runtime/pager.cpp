@@ -243,10 +243,11 @@ struct Pager::Impl {
         up.triangle_objects.insert(up.triangle_objects.end(), decoded.triangle_objects.begin(),
                                    decoded.triangle_objects.end());
         // The GPU form: each vertex tagged with a triangle of its object (vertex_object_tags.h).
+        const std::span<const uint32_t> objects(up.triangle_objects);
         out.clusters.back().object_per_triangle =
             tagVertexObjects(std::span(up.vertices).subspan(g.first_vertex),
                              std::span(up.indices).subspan(g.first_index),
-                             std::span<const uint32_t>(up.triangle_objects).subspan(g.first_triangle)) > 0;
+                             objects.subspan(g.first_triangle)) > 0;
       }
       if (up.bytes() != out.staged_bytes)
         throw pageError(out.page, "decoded size differs from its cluster records");

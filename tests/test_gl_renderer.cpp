@@ -97,10 +97,10 @@ class PoolBuilder {
     upload_.indices.insert(upload_.indices.end(), indices.begin(), indices.end());
     upload_.triangle_objects.insert(upload_.triangle_objects.end(), objects.begin(),
                                     objects.end());
-    c.object_per_triangle =
-        tagVertexObjects(std::span(upload_.vertices).subspan(c.first_vertex),
-                         std::span(upload_.indices).subspan(c.first_index),
-                         std::span<const uint32_t>(upload_.triangle_objects).subspan(c.first_triangle)) > 0;
+    const std::span<const uint32_t> all_objects(upload_.triangle_objects);
+    c.object_per_triangle = tagVertexObjects(std::span(upload_.vertices).subspan(c.first_vertex),
+                                             std::span(upload_.indices).subspan(c.first_index),
+                                             all_objects.subspan(c.first_triangle)) > 0;
     clusters_.push_back(c);
     return clusters_.size() - 1;
   }
@@ -310,7 +310,8 @@ TEST_F(GlRendererTest, TriangleWhoseVerticesObjectsShareTakesItsOwnObjectAndColo
   EXPECT_EQ(middle_id, 5u);
   EXPECT_GT(middle[0], 100);
   EXPECT_LT(middle[2], 10);
-  for (const glm::dvec2& outer : {glm::dvec2(0.0, -2.5), glm::dvec2(-2.0, 1.0), glm::dvec2(2.0, 1.0)}) {
+  for (const glm::dvec2& outer :
+       {glm::dvec2(0.0, -2.5), glm::dvec2(-2.0, 1.0), glm::dvec2(2.0, 1.0)}) {
     const auto [id, rgba] = pixelAt(outer.x, outer.y);
     EXPECT_EQ(id, 7u) << outer.x << ", " << outer.y;
     EXPECT_LT(rgba[0], 10);
