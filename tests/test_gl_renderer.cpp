@@ -288,10 +288,9 @@ TEST_F(GlRendererTest, TriangleWhoseVerticesObjectsShareTakesItsOwnObjectAndColo
   const std::vector<glm::dvec3> world = {at(2.0, -1.5), at(-2.0, -1.5), at(0.0, 2.0),  // middle
                                          at(0.0, -4.0), at(-3.5, 1.5), at(3.5, 1.5)};   // outer
   // Counter-clockwise on screen (screen x is -y): the middle, then one outer triangle per edge.
-  builder.addCluster(world, {0, 1, 2, 0, 3, 1, 1, 4, 2, 2, 5, 0}, {4, 6, 6, 6});
-  std::vector<pkg::EncodedVertex> tagged(6);
-  std::vector<uint16_t> indices = {0, 1, 2, 0, 3, 1, 1, 4, 2, 2, 5, 0};
-  ASSERT_EQ(tagVertexObjects(tagged, indices, std::vector<uint32_t>{4, 6, 6, 6}), 1u)
+  const size_t cluster =
+      builder.addCluster(world, {0, 1, 2, 0, 3, 1, 1, 4, 2, 2, 5, 0}, {4, 6, 6, 6});
+  ASSERT_TRUE(builder.clusters()[cluster].object_per_triangle)
       << "the middle triangle must need the per-triangle look-up";
   auto pool = builder.makePool();
   GlRenderer renderer(smallOptions());

@@ -122,6 +122,7 @@ const fs::path& gridPackage() {
 struct ExpectedPage {
   std::vector<uint32_t> clusters;
   std::vector<DecodedCluster> decoded;
+  std::vector<bool> object_per_triangle;  // per cluster, as the pager must flag it
   uint64_t bytes = 0;
 };
 
@@ -141,7 +142,8 @@ std::vector<ExpectedPage> expectedPages(const PackageView& view) {
       pages[p].bytes += d.vertices.size() * 8 + d.indices.size() * 2 + d.triangle_objects.size() * 4;
       // What the GPU receives: the decode with its vertices tagged by object.
       std::vector<uint16_t> indices(d.indices.begin(), d.indices.end());
-      tagVertexObjects(d.vertices, indices, d.triangle_objects);
+      pages[p].object_per_triangle.push_back(
+          tagVertexObjects(d.vertices, indices, d.triangle_objects) > 0);
       d.indices.assign(indices.begin(), indices.end());
       pages[p].decoded.push_back(std::move(d));
     }
@@ -213,6 +215,7 @@ void expectUploadMatches(const Pager& pager, const PageUpload& up, const Expecte
     EXPECT_EQ(g.shift, d.shift);
     EXPECT_EQ(g.grid_origin, d.grid_origin);
     EXPECT_EQ(g.cell_m, d.cell_m);
+    EXPECT_EQ(g.object_per_triangle, expected.object_per_triangle[k]);
     EXPECT_EQ(std::memcmp(up.vertices.data() + v, d.vertices.data(), d.vertices.size() * 8), 0)
         << "vertices of cluster " << expected.clusters[k];
     for (size_t n = 0; n < d.indices.size(); ++n)
