@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <future>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -21,6 +22,7 @@
 #include "gl_program.h"
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
+#include "sealed_pipe_runs.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -75,6 +77,9 @@ constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills it
 // The transform's columns are perpendicular (rotation, mirroring, scaling along the axes; no
 // shear): a tube's cross-sections are then perpendicular to its axis, within its largest radius.
 constexpr uint8_t kOrthogonalAxes = 16;
+// Roles in a sealed pipe run (sealed_pipe_runs.h): an open part whose inside cannot be seen from
+// outside the run, and a closed solid that closes one of its ends.
+constexpr uint8_t kRunMember = 32, kRunCloser = 64;
 
 // What the per-frame choice reads of an instance, prepared once.
 struct InstanceBounds {
@@ -369,7 +374,8 @@ struct Form {
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; thinner
 // than `thin` metres across, a line or a point, or nothing when thinner than `min_thin`.
 // `eye_outside`: the eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's
-// inside cannot be seen (tubeInsideHidden).
+// or elbow's inside cannot be seen (tubeInsideHidden, or a member of a sealed run with the eye
+// clear of every sealed run).
 Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin,
                 bool eye_outside, bool inside_hidden) {
   Form f;
@@ -410,7 +416,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       }
       f.shape = Shape::Torus;
       f.b = levelIndex(arcSegments(b.size[1], float(kTwoPi), ring_tolerance));
-      closed = false;
+      closed = inside_hidden || b.size[2] >= float(kTwoPi);  // a full torus has no open ends
       break;
     }
     default: {  // box and profiles: thin in two directions, a line along the third; in all three, a point
@@ -556,6 +562,44 @@ struct SmoothVertex {
 struct ParametricInstanceMeshes::Impl {
   const PackageView* view = nullptr;
   std::vector<InstanceBounds> bounds;  // by instance index
+  // Parametric clusters holding members or closers of sealed runs, with the box (package frame)
+  // of those instances; and whether this frame's eye is clear of all of them.
+  struct RunCluster {
+    uint32_t cluster;
+    glm::dvec3 lo, hi;
+  };
+  struct FoundRuns {
+    std::vector<uint8_t> roles;  // by instance
+    SealedRunStats stats;
+  };
+  std::future<FoundRuns> runs_found;  // valid until the first draw takes it
+  std::vector<RunCluster> run_clusters;
+  SealedRunStats run_stats;
+  bool eye_clear_of_runs = false;
+
+  // Marks the members and closers of the runs found, and lists their clusters.
+  void takeSealedRuns() {
+    FoundRuns found = runs_found.get();
+    run_stats = found.stats;
+    const auto clusters = view->clusters();
+    for (uint32_t c = 0; c < clusters.size(); ++c) {
+      const pkg::ClusterRecord& r = clusters[c];
+      if (r.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric) ||
+          r.instance_first > bounds.size() || r.instance_count > bounds.size() - r.instance_first)
+        continue;
+      const glm::dvec3 anchor = clusterAnchor(r);
+      RunCluster run{c, glm::dvec3(INFINITY), glm::dvec3(-INFINITY)};
+      for (uint32_t i = r.instance_first; i < r.instance_first + r.instance_count; ++i) {
+        InstanceBounds& b = bounds[i];
+        if (!(b.flags & kValid) || found.roles[i] == 0) continue;
+        b.flags |= ((found.roles[i] & kSealedRunMember) ? kRunMember : 0) |
+                   ((found.roles[i] & kSealedRunCloser) ? kRunCloser : 0);
+        run.lo = glm::min(run.lo, anchor + glm::dvec3(b.centre - b.extent));
+        run.hi = glm::max(run.hi, anchor + glm::dvec3(b.centre + b.extent));
+      }
+      if (run.lo.x <= run.hi.x) run_clusters.push_back(run);
+    }
+  }
   GLuint program = 0, vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
   UnitMeshBuilder builder;
   std::unordered_map<uint32_t, UnitMesh> unit_meshes;
@@ -720,6 +764,12 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
     for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
       s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
   }
+  // Runs are found beside the start-up's page loads and taken by the first draw.
+  s.runs_found = std::async(std::launch::async, [instances] {
+    Impl::FoundRuns found;
+    found.roles = findSealedRuns(instances, &found.stats);
+    return found;
+  });
   while (glGetError() != GL_NO_ERROR) {
   }
   s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricSmoothVertexShader()},
@@ -780,6 +830,24 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
     s.drawn.clear();
   }
   s.eye = view.eye;
+  // Sealed runs hide their insides only while the eye, and the near plane around it, is outside
+  // every member and closer of every sealed run (sealed_pipe_runs.h); decided once a frame.
+  if (s.runs_found.valid()) s.takeSealedRuns();
+  if (view.pass != InstancePass::Second) {
+    s.eye_clear_of_runs = true;
+    for (const Impl::RunCluster& run : s.run_clusters) {
+      if (glm::any(glm::lessThan(view.eye, run.lo - double(near_reach))) ||
+          glm::any(glm::greaterThan(view.eye, run.hi + double(near_reach))))
+        continue;
+      const pkg::ClusterRecord& r = records[run.cluster];
+      const glm::vec3 eye_local(view.eye - clusterAnchor(r));
+      for (uint32_t i = r.instance_first; i < r.instance_first + r.instance_count; ++i)
+        if ((s.bounds[i].flags & (kRunMember | kRunCloser)) &&
+            !eyeOutsideSolid(s.bounds[i], eye_local, near_reach))
+          s.eye_clear_of_runs = false;
+      if (!s.eye_clear_of_runs) break;
+    }
+  }
   const bool test = view.pass == InstancePass::Second && view.box_hidden;
   // One instance of cluster `c` (anchor_eye: its anchor relative to the eye).
   auto consider = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
@@ -811,7 +879,8 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
                    static_cast<float>(view.thin_px) * metres_per_px,
                    static_cast<float>(view.min_thin_px) * metres_per_px,
                    eyeOutsideSolid(b, -anchor_eye, near_reach),
-                   !(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach));
+                   ((b.flags & kRunMember) && s.eye_clear_of_runs) ||
+                       (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach)));
     if (form.shape == Shape::None) {
       ++stats.instances_culled;
       return;

@@ -9,8 +9,9 @@
 // points (InstanceLodView::thin_px), extrusions whose profile detail is below tolerance their box.
 // Instances outside the frustum's side planes or whose bounding sphere projects below
 // min_feature_px are dropped. Closed surfaces seen from outside the solid (not merely outside
-// its bounding sphere), and open tubes seen from between their end planes, have their back faces
-// culled.
+// its bounding sphere), open tubes seen from between their end planes, and the open tubes and
+// elbows of sealed pipe runs while the eye is clear of every such run (sealed_pipe_runs.h) have
+// their back faces culled.
 // How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
 // formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
 // every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex

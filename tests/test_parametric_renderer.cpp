@@ -532,6 +532,56 @@ TEST_F(ParametricRendering, BackFacesCulledOutsideTheSolidNotItsSphere) {
   EXPECT_EQ(wall_px, leaning_frame.ids.size());
 }
 
+// A pipe run of the plant's shape (sealed_pipe_runs.h): flange, spool along +x, a 90 degree
+// elbow, spool along +y, and (when `far_flange`) a flange closing the far end.
+std::vector<Part> pipeRun(bool far_flange) {
+  const float r = 0.4f, bend = 1.0f, length = 3.0f;
+  auto flange_at = [&](uint32_t id, const glm::dvec3& centre, const glm::vec3& axis_deg,
+                       const glm::dvec3& dir) {
+    return Part{id, Cylinder{1.5f * r, 0.1f, true}, placed(centre - 0.05 * dir, axis_deg)};
+  };
+  Transform elbow;
+  elbow.origin = {length, bend, 0.0};
+  elbow.linear = glm::mat3(glm::vec3(0, -1, 0), glm::vec3(1, 0, 0), glm::vec3(0, 0, 1));
+  std::vector<Part> parts = {
+      flange_at(1, {0, 0, 0}, {0, 90, 0}, {1, 0, 0}),
+      Part{2, Cylinder{r, length, false}, placed({0, 0, 0}, {0, 90, 0})},
+      Part{3, TorusSegment{bend, r, 0.5f * std::numbers::pi_v<float>}, elbow},
+      Part{4, Cylinder{r, length, false}, placed({length + bend, bend, 0}, {-90, 0, 0})}};
+  if (far_flange)
+    parts.push_back(flange_at(5, {length + bend, bend + length, 0}, {-90, 0, 0}, {0, 1, 0}));
+  return parts;
+}
+
+// Seen from beyond the first spool's end plane, the open spools and the elbow of a run closed by
+// flanges have their back faces culled, and the picture is the fine mesh's; left open at one end,
+// the run is drawn with both faces; with the eye inside it, too, and its inside fills the view.
+TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
+  const Camera outside = lookingAt({-1.5, -1.2, 1.2}, {2.0, 1.0, 0.0});
+  const fs::path sealed = buildPackage("sealed_run", pipeRun(true), false);
+  const Frame culled = render(sealed, outside, ParametricMode::Tessellated);
+  const Frame mesh = render(buildPackage("sealed_run_mesh", pipeRun(true), true), outside,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(culled.stats.parametric_instances_drawn, 5u);
+  EXPECT_GT(culled.stats.parametric_triangles, 100u);
+  EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+  Agreement g = compare(culled, mesh, 2e-3);
+  EXPECT_GT(g.covered, size_t(kWidth * kHeight / 20));
+  EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+
+  const Frame open = render(buildPackage("open_run", pipeRun(false), false), outside,
+                            ParametricMode::Tessellated);
+  EXPECT_GT(open.stats.parametric_two_sided_triangles, 100u);
+
+  // Inside the second spool, 1 m from the far flange, looking at it.
+  const Camera inside = lookingAt({4.0, 3.0, 0.0}, {4.0, 4.0, 0.05});
+  const Frame in_run = render(sealed, inside, ParametricMode::Tessellated);
+  EXPECT_GT(in_run.stats.parametric_two_sided_triangles, 100u);
+  size_t background = 0;
+  for (uint32_t id : in_run.ids) background += id == 0u;
+  EXPECT_EQ(background, 0u);
+}
+
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
 // drawn with fewer segments, so the pair costs far less than twice the near one alone (a
 // per-cluster resolution would draw both at the near one's).
