@@ -16,6 +16,7 @@
 #include "edge_counts.h"
 #include "far_proxy.h"
 #include "grid_weld.h"
+#include "union_find.h"
 
 namespace tw {
 
@@ -122,20 +123,6 @@ std::vector<uint32_t> triangleObjectIds(const std::vector<uint32_t>& tris,
   }
   return ids;
 }
-
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {
-    a = find(a);
-    b = find(b);
-    if (a != b) parent[std::max(a, b)] = std::min(a, b);
-  }
-};
 
 // Read-only state shared by the groups of one level attempt.
 struct LevelContext {

@@ -31,6 +31,7 @@
 
 #include "nurbs.h"
 #include "position_key.h"
+#include "union_find.h"
 
 namespace tw {
 namespace {
@@ -165,26 +166,6 @@ void planGrid(const Curvature& c, double tolerance, uint32_t& n, uint32_t& m) {
 
 // ---------------------------------------------------------------------------------------------
 // Corners and adjacency.
-
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) {
-    for (size_t i = 0; i < n; ++i) parent[i] = static_cast<uint32_t>(i);
-  }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(uint32_t a, uint32_t b) {  // the smaller id stays the root: order-independent
-    a = find(a);
-    b = find(b);
-    if (a == b) return;
-    if (a < b)
-      parent[b] = a;
-    else
-      parent[a] = b;
-  }
-};
 
 using CellKey = GridCellKey;
 using CellHash = GridCellHash;

@@ -1,12 +1,13 @@
-// Sealed pipe runs: end discs matched in a hash grid, runs by union-find. See sealed_pipe_runs.h.
+// Sealed pipe runs: end discs matched on a sorted cell index, runs by union-find. See sealed_pipe_runs.h.
 #include "sealed_pipe_runs.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <numeric>
 
 #include <glm/glm.hpp>
+
+#include "union_find.h"
 
 namespace tw {
 namespace {
@@ -132,16 +133,6 @@ class CellIndex {
   std::vector<std::pair<uint64_t, uint32_t>> entries_;
 };
 
-struct UnionFind {
-  std::vector<uint32_t> parent;
-  explicit UnionFind(size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  uint32_t find(uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void join(uint32_t a, uint32_t b) { parent[find(a)] = find(b); }
-};
-
 }  // namespace
 
 std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instances,
@@ -231,7 +222,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
                            glm::dot(a.normal, b.normal) > -kParallelCos)
                          return;
                        disc_sealed[d] = 1;
-                       runs.join(a.part, b.part);
+                       runs.unite(a.part, b.part);
                      });
   }
 
@@ -246,7 +237,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
     if (h.part == kNoPart)
       closing.emplace_back(discs[d].part, k);
     else
-      runs.join(discs[d].part, h.part);
+      runs.unite(discs[d].part, h.part);
   };
   const double small_cell = 0.5, large_cell = 8.0;
   CellIndex open_cells;
