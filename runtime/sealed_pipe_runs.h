@@ -12,10 +12,11 @@
 // members' back faces, as long as the eye (and the near plane that could cut a member open) is
 // outside every member and every closing solid of every sealed run.
 // How: the end discs of every open tube, cone and partial torus whose transform is a rotation
-// with one uniform scale (mirroring allowed) go into a hash grid. Two discs seal each other when
-// their centres and radii agree within kJoinToleranceM and they face each other; a disc without a
-// partner is closed when it lies inside a capped cylinder whose axis is parallel to its normal.
-// Joined instances form runs (union-find); a run is sealed when all its discs are.
+// with one uniform scale (mirroring allowed) are indexed by grid cell (sorted cell keys). Two
+// discs seal each other when their centres and radii agree within kJoinToleranceM and they face
+// each other; a disc without a partner is closed when it lies wholly inside a capped cylinder or
+// a box, and joins the run of an open cylinder whose solid holds it. Joined instances form runs
+// (union-find); a run is sealed when all its discs are.
 // Positions are the package frame's (InstanceRecord::origin), where one run's coordinates agree
 // to float rounding.
 #pragma once
