@@ -22,6 +22,7 @@
 #include "gl_program.h"
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
+#include "parametric_unit_meshes.h"
 #include "sealed_pipe_runs.h"
 #include "tessellate.h"
 
@@ -37,11 +38,6 @@ constexpr std::array<uint32_t, 28> kLevels = {1,   2,   3,   4,   5,   6,   8,  
                                               192, 256, 320, 384, 512, 640, 768, 1024};
 static_assert(kLevels.back() == kMaxArcSegments);
 
-// How far out a straddling ring of n segments puts its vertices (UnitMeshBuilder::
-// straddlingCircle), as a factor of the radius: 2 / (1 + cos(pi / n)); 4/3 at the fewest, 3.
-float ringSwell(uint32_t n) {
-  return static_cast<float>(2.0 / (1.0 + std::cos(std::numbers::pi / std::max(n, 3u))));
-}
 const float kMaxRingSwell = ringSwell(3);
 
 uint32_t levelIndex(uint32_t segments) {
@@ -202,164 +198,6 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   }
   return b;
 }
-
-// A unit mesh in the builder's arrays: its vertices start at base_vertex, its indices (relative to
-// base_vertex) at first_index; the first side_indices are the surface without end caps.
-struct UnitMesh {
-  uint32_t base_vertex = 0, vertex_count = 0, first_index = 0, side_indices = 0, all_indices = 0;
-};
-
-// Builds the unit meshes: points of a shape (shapedPoint gives them the instance's parameters).
-// Rows and columns follow formats/primitive_tessellation.cpp, and every triangle is
-// counter-clockwise seen from outside.
-//   tube (cylinder, cone): (cos a, sin a, z in [0, 1], 1 on the side's rim, 2 on a cap's rim,
-//                          0 at a cap centre)
-//   sphere:                (cos a, sin a, cos latitude, sin latitude)
-//   torus:                 (fraction of the sweep, cos b, sin b, -) with b around the tube
-//   box:                   (+-1, +-1, +-1, -)
-// In the box frame (thin forms, extrusions as boxes) xyz in [-1, 1] spans the instance's
-// canonical box.
-class UnitMeshBuilder {
- public:
-  std::vector<glm::vec4> shapes;
-  std::vector<uint32_t> indices;
-
-  UnitMesh tube(uint32_t n) {
-    UnitMesh m = begin();
-    const std::vector<glm::vec2> ring = straddlingCircle(n);
-    // Side rims, then the caps' own rims (flat normals), then the cap centres.
-    for (float rim : {1.0f, 2.0f})
-      for (float z : {0.0f, 1.0f})
-        for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, z, rim});
-    shapes.push_back({0.0f, 0.0f, 0.0f, 0.0f});  // bottom cap centre
-    shapes.push_back({0.0f, 0.0f, 1.0f, 0.0f});  // top cap centre
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t i1 = (i + 1) % n;
-      quad(i, i1, n + i1, n + i);
-    }
-    m.side_indices = count(m);
-    for (uint32_t i = 0; i < n; ++i) {
-      const uint32_t i1 = (i + 1) % n;
-      triangle(4 * n, 2 * n + i1, 2 * n + i);
-      triangle(4 * n + 1, 3 * n + i, 3 * n + i1);
-    }
-    m.all_indices = count(m);
-    return m;
-  }
-
-  // n columns around, m rows pole to pole.
-  UnitMesh sphere(uint32_t n, uint32_t m) {
-    UnitMesh mesh = begin();
-    const std::vector<glm::vec2> ring = circle(n);
-    shapes.push_back({1.0f, 0.0f, 0.0f, -1.0f});  // south pole
-    for (uint32_t j = 1; j < m; ++j) {
-      const double phi = -0.5 * std::numbers::pi + std::numbers::pi * j / m;
-      const float c = static_cast<float>(std::cos(phi)), s = static_cast<float>(std::sin(phi));
-      for (const glm::vec2& cs : ring) shapes.push_back({cs.x, cs.y, c, s});
-    }
-    const uint32_t north = 1 + (m - 1) * n;
-    shapes.push_back({1.0f, 0.0f, 0.0f, 1.0f});
-    auto at = [n](uint32_t row, uint32_t i) { return 1 + (row - 1) * n + i % n; };
-    for (uint32_t i = 0; i < n; ++i) {
-      triangle(0, at(1, i + 1), at(1, i));
-      for (uint32_t row = 1; row + 1 < m; ++row) quad(at(row, i), at(row, i + 1), at(row + 1, i + 1), at(row + 1, i));
-      triangle(at(m - 1, i), at(m - 1, i + 1), north);
-    }
-    mesh.side_indices = mesh.all_indices = count(mesh);
-    return mesh;
-  }
-
-  // nu steps along the sweep (nu + 1 columns), nv rows around the tube.
-  UnitMesh torus(uint32_t nu, uint32_t nv) {
-    UnitMesh m = begin();
-    const std::vector<glm::vec2> ring = straddlingCircle(nv);
-    for (const glm::vec2& cs : ring)
-      for (uint32_t i = 0; i <= nu; ++i) shapes.push_back({float(i) / float(nu), cs.x, cs.y, 0.0f});
-    auto at = [nu](uint32_t row, uint32_t i) { return row * (nu + 1) + i; };
-    for (uint32_t k = 0; k < nv; ++k) {
-      const uint32_t k1 = (k + 1) % nv;
-      for (uint32_t i = 0; i < nu; ++i) quad(at(k, i), at(k, i + 1), at(k1, i + 1), at(k1, i));
-    }
-    m.side_indices = m.all_indices = count(m);
-    return m;
-  }
-
-  UnitMesh box() {
-    UnitMesh m = begin();
-    for (uint32_t c = 0; c < 8; ++c)
-      shapes.push_back({(c & 1) ? 1.0f : -1.0f, (c & 2) ? 1.0f : -1.0f, (c & 4) ? 1.0f : -1.0f, 0.0f});
-    // Corners by bit (0: x, 1: y, 2: z), two triangles per face: -X, +X, -Y, +Y, -Z, +Z.
-    constexpr uint32_t kCorners[36] = {0, 6, 2, 0, 4, 6, 1, 7, 5, 1, 3, 7, 0, 5, 4, 0, 1, 5,
-                                       2, 7, 3, 2, 6, 7, 0, 3, 1, 0, 2, 3, 4, 7, 6, 4, 5, 7};
-    for (uint32_t i = 0; i < 36; i += 3) triangle(kCorners[i], kCorners[i + 1], kCorners[i + 2]);
-    m.side_indices = m.all_indices = count(m);
-    return m;
-  }
-
-  // n segments from t = 0 to 1, as line pairs: shape (t, 0, t, 0) is the torus's centre-circle
-  // point at sweep fraction t (shapedPoint).
-  UnitMesh axis(uint32_t n) {
-    UnitMesh m = begin();
-    for (uint32_t i = 0; i <= n; ++i) shapes.push_back({float(i) / float(n), 0.0f, float(i) / float(n), 0.0f});
-    for (uint32_t i = 0; i < n; ++i) indices.insert(indices.end(), {i, i + 1});
-    m.side_indices = m.all_indices = count(m);
-    return m;
-  }
-
-  // The segment through the centre of the instance's canonical box along its axis `k` (0, 1, 2),
-  // drawn in the box frame: a tube's axis, a beam's centre line.
-  UnitMesh boxAxis(uint32_t k) {
-    UnitMesh m = begin();
-    glm::vec4 end(0.0f);
-    end[int(k % 3)] = 1.0f;
-    shapes.push_back(-end);
-    shapes.push_back(end);
-    indices.insert(indices.end(), {0u, 1u});
-    m.side_indices = m.all_indices = count(m);
-    return m;
-  }
-
-  // The centre of the instance's canonical box (drawn in the box frame).
-  UnitMesh point() {
-    UnitMesh m = begin();
-    shapes.push_back(glm::vec4(0.0f));
-    indices.push_back(0);
-    m.side_indices = m.all_indices = count(m);
-    return m;
-  }
-
- private:
-  UnitMesh begin() const {
-    UnitMesh m;
-    m.base_vertex = static_cast<uint32_t>(shapes.size());
-    m.first_index = static_cast<uint32_t>(indices.size());
-    return m;
-  }
-  uint32_t count(const UnitMesh& m) const { return static_cast<uint32_t>(indices.size()) - m.first_index; }
-  void triangle(uint32_t a, uint32_t b, uint32_t c) { indices.insert(indices.end(), {a, b, c}); }
-  void quad(uint32_t a, uint32_t b, uint32_t c, uint32_t d) {
-    triangle(a, b, c);
-    triangle(a, c, d);
-  }
-  static std::vector<glm::vec2> circle(uint32_t n) {
-    std::vector<glm::vec2> ring(n);
-    for (uint32_t i = 0; i < n; ++i) {
-      const double a = kTwoPi * i / n;
-      ring[i] = {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a))};
-    }
-    return ring;
-  }
-  // A ring whose chords cross the true circle: vertices pushed out so the polygon's largest
-  // distance inside (at chord middles) equals its largest outside (at vertices), each half the
-  // inscribed polygon's sagitta. A pipe then keeps its width on average, seen from any side,
-  // instead of always looking thinner; in a rack of pipes, the gaps between them stay closed.
-  static std::vector<glm::vec2> straddlingCircle(uint32_t n) {
-    std::vector<glm::vec2> ring = circle(n);
-    const float out = ringSwell(n);
-    for (glm::vec2& p : ring) p *= out;
-    return ring;
-  }
-};
 
 // How one visible instance is drawn: its unit mesh (shape and level indices, or a box axis), end
 // caps, and the batch (back-face culling, mirroring; lines; points).
@@ -568,19 +406,13 @@ struct ParametricInstanceMeshes::Impl {
     uint32_t cluster;
     glm::dvec3 lo, hi;
   };
-  struct FoundRuns {
-    std::vector<uint8_t> roles;  // by instance
-    SealedRunStats stats;
-  };
-  std::future<FoundRuns> runs_found;  // valid until the first draw takes it
+  std::future<std::vector<uint8_t>> runs_found;  // roles by instance; valid until the first draw
   std::vector<RunCluster> run_clusters;
-  SealedRunStats run_stats;
   bool eye_clear_of_runs = false;
 
   // Marks the members and closers of the runs found, and lists their clusters.
   void takeSealedRuns() {
-    FoundRuns found = runs_found.get();
-    run_stats = found.stats;
+    const std::vector<uint8_t> roles = runs_found.get();
     const auto clusters = view->clusters();
     for (uint32_t c = 0; c < clusters.size(); ++c) {
       const pkg::ClusterRecord& r = clusters[c];
@@ -591,9 +423,9 @@ struct ParametricInstanceMeshes::Impl {
       RunCluster run{c, glm::dvec3(INFINITY), glm::dvec3(-INFINITY)};
       for (uint32_t i = r.instance_first; i < r.instance_first + r.instance_count; ++i) {
         InstanceBounds& b = bounds[i];
-        if (!(b.flags & kValid) || found.roles[i] == 0) continue;
-        b.flags |= ((found.roles[i] & kSealedRunMember) ? kRunMember : 0) |
-                   ((found.roles[i] & kSealedRunCloser) ? kRunCloser : 0);
+        if (!(b.flags & kValid) || roles[i] == 0) continue;
+        b.flags |= ((roles[i] & kSealedRunMember) ? kRunMember : 0) |
+                   ((roles[i] & kSealedRunCloser) ? kRunCloser : 0);
         run.lo = glm::min(run.lo, anchor + glm::dvec3(b.centre - b.extent));
         run.hi = glm::max(run.hi, anchor + glm::dvec3(b.centre + b.extent));
       }
@@ -765,11 +597,7 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
       s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
   }
   // Runs are found beside the start-up's page loads and taken by the first draw.
-  s.runs_found = std::async(std::launch::async, [instances] {
-    Impl::FoundRuns found;
-    found.roles = findSealedRuns(instances, &found.stats);
-    return found;
-  });
+  s.runs_found = std::async(std::launch::async, [instances] { return findSealedRuns(instances); });
   while (glGetError() != GL_NO_ERROR) {
   }
   s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricSmoothVertexShader()},
