@@ -8,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <tbb/task_group.h>
+
 namespace tw {
 
 namespace {
@@ -281,14 +283,24 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
       stats.parametric_skipped = uint32_t(parametric_list.size());
     culler_->splitByLastVisible(eye, hzb_cut_, pass1_, rest_, stats);
     splitByKind(pass1_, mesh_pass_, parametric_pass_);
+    // The first pass overlaps its parts (docs/runtime.md, "Overlap"): a worker chooses and
+    // expands the tessellated parametrics while this thread submits the meshes, and the flush
+    // hands the meshes to llvmpipe's rasterizer threads before the parametrics follow.
+    last_parametric_view_.pass = InstancePass::First;
+    tbb::task_group prepare;
+    if (!parametric_pass_.empty())
+      prepare.run([this] {
+        parametric_->prepare(parametric_pass_, last_parametric_view_, options_.parametrics);
+      });
     appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, items_);
+    glFlush();
+    prepare.wait();
     // Tessellated parametrics are also culled instance by instance, in the same two passes
     // (parametric_instance_meshes.h, "Occlusion").
     auto box_hidden = [this, &frame](const glm::vec3& lo, const glm::vec3& hi) {
       return culler_->boxHidden(lo, hi, frame);
     };
-    last_parametric_view_.pass = InstancePass::First;
     drawParametrics(parametric_pass_, &stats);
     full_order_.assign(mesh_pass_.begin(), mesh_pass_.end());
     full_order_pass1_ = mesh_pass_.size();

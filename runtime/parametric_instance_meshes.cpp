@@ -631,6 +631,14 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
                                                 const InstanceLodView& view,
                                                 uint32_t object_color_count,
                                                 std::vector<ParametricMeshInstance>& profiles) {
+  InstanceLodStats stats = prepare(clusters, view, profiles);
+  submit(view.view_projection, object_color_count, stats);
+  return stats;
+}
+
+InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clusters,
+                                                   const InstanceLodView& view,
+                                                   std::vector<ParametricMeshInstance>& profiles) {
   Impl& s = *impl_;
   InstanceLodStats stats;
   profiles.clear();
@@ -742,8 +750,14 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
     s.deferred.clear();
   }
   stats.instances_drawn -= profiles.size();  // counted by whoever draws them
-  if (s.vertices.empty()) return stats;
+  stats.unit_meshes = static_cast<uint32_t>(s.unit_meshes.size());
+  return stats;
+}
 
+void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
+                                      InstanceLodStats& stats) {
+  Impl& s = *impl_;
+  if (s.vertices.empty()) return;
   // One upload of every batch, then one draw per batch.
   s.all_indices.clear();
   std::array<size_t, kBatchCount + 1> first{};
@@ -757,7 +771,8 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
   glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
                     s.all_indices.data(), GL_STREAM_DRAW);
   glUseProgram(s.program);
-  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE, &m[0][0]);
+  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                            &view_projection[0][0]);
   glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
   glBindVertexArray(s.vertex_array);
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
@@ -781,8 +796,9 @@ InstanceLodStats ParametricInstanceMeshes::draw(std::span<const uint32_t> cluste
   glFrontFace(GL_CCW);
   glBindVertexArray(0);
   glUseProgram(0);
-  stats.unit_meshes = static_cast<uint32_t>(s.unit_meshes.size());
-  return stats;
+  // Drawn once: a second submit without a prepare draws nothing.
+  s.vertices.clear();
+  for (auto& list : s.indices) list.clear();
 }
 
 }  // namespace tw

@@ -101,8 +101,18 @@ class ParametricInstanceMeshes {
   // object colours at gl_shaders.h kObjectColorBinding. Extrusions and revolutions that need
   // their surface are not drawn: they are listed in `profiles` (by cluster, with their distance)
   // for ParametricMeshes::drawInstances.
+  // prepare() then submit().
   InstanceLodStats draw(std::span<const uint32_t> clusters, const InstanceLodView& view,
                         uint32_t object_color_count, std::vector<ParametricMeshInstance>& profiles);
+  // The CPU half of draw(): chooses each instance's form and expands the visible ones into the
+  // batch that the next submit() draws. It makes no GL call, so it may run on another thread
+  // while the GL thread submits other draws (the frame loop expands the first pass while the
+  // meshes go to GL). Never two at once, nor beside submit() or recordVisible().
+  InstanceLodStats prepare(std::span<const uint32_t> clusters, const InstanceLodView& view,
+                           std::vector<ParametricMeshInstance>& profiles);
+  // The GL half: uploads the prepared batch and draws it, adding its draw calls and triangles
+  // to `stats`. A batch is drawn once.
+  void submit(const glm::mat4& view_projection, uint32_t object_color_count, InstanceLodStats& stats);
 
   // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)
   // `box_hidden` hides, for the next frame's first pass.

@@ -102,6 +102,46 @@ struct ParametricRenderer::Impl {
   std::vector<ParametricMeshInstance> profile_instances;  // their extrusions and revolutions
   std::vector<gpu::GpuParametricDraw> draws;
   std::vector<DrawArraysIndirectCommand> commands;
+  // A prepare() not yet drawn: the clusters and pass it was for, its statistics and CPU time.
+  bool prepared = false;
+  std::vector<uint32_t> prepared_clusters;
+  InstancePass prepared_pass = InstancePass::All;
+  InstanceLodStats prepared_stats;
+  double prepared_ms = 0.0;
+
+  // Sorts `clusters` into the lists above by how `mode` draws them.
+  void classify(std::span<const uint32_t> clusters, ParametricMode mode) {
+    const auto records = view->clusters();
+    for (auto& list : by_type) list.clear();
+    mesh_clusters.clear();
+    instance_clusters.clear();
+    for (uint32_t c : clusters) {
+      if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric) ||
+          records[c].instance_count == 0 || records[c].instance_first >= view->instances().size())
+        continue;  // the view validated the ranges; never read past the table all the same
+      const uint32_t type = view->instances()[records[c].instance_first].type;
+      if (mode == ParametricMode::Impostor && type < kImpostorTypes)
+        by_type[type].push_back(c);
+      else if (mode == ParametricMode::Tessellated && !fixed_tolerance &&
+               ParametricInstanceMeshes::handles(type))
+        instance_clusters.push_back(c);
+      else
+        mesh_clusters.push_back(c);
+    }
+  }
+
+  InstanceLodView lodView(const ParametricView& camera) const {
+    InstanceLodView lod_view;
+    lod_view.eye = camera.eye;
+    lod_view.view_projection = renderer->viewProjection();
+    lod_view.pixel_scale = camera.pixel_scale;
+    lod_view.near_m = camera.near_m;
+    lod_view.tolerance_px = camera.tolerance_px;
+    lod_view.min_feature_px = camera.min_feature_px;
+    lod_view.pass = camera.pass;
+    lod_view.box_hidden = camera.box_hidden;
+    return lod_view;
+  }
 
   ~Impl() {
     for (GLuint program : programs) glDeleteProgram(program);
@@ -190,26 +230,17 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   Impl& s = *impl_;
   ParametricDrawStats stats;
   mode = resolveParametricMode(mode);
+  // A prepare() for exactly this draw is used; any other is dropped.
+  const bool use_prepared = s.prepared && mode == ParametricMode::Tessellated &&
+                            s.prepared_pass == view.pass &&
+                            std::equal(clusters.begin(), clusters.end(), s.prepared_clusters.begin(),
+                                       s.prepared_clusters.end());
+  s.prepared = false;
   if (mode == ParametricMode::Off || (clusters.empty() && view.pass != InstancePass::Second))
     return stats;
   const auto start = Clock::now();
   const auto records = s.view->clusters();
-  for (auto& list : s.by_type) list.clear();
-  s.mesh_clusters.clear();
-  s.instance_clusters.clear();
-  for (uint32_t c : clusters) {
-    if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric) ||
-        records[c].instance_count == 0 || records[c].instance_first >= s.view->instances().size())
-      continue;  // the view validated the ranges; never read past the table all the same
-    const uint32_t type = s.view->instances()[records[c].instance_first].type;
-    if (mode == ParametricMode::Impostor && type < kImpostorTypes)
-      s.by_type[type].push_back(c);
-    else if (mode == ParametricMode::Tessellated && !s.fixed_tolerance &&
-             ParametricInstanceMeshes::handles(type))
-      s.instance_clusters.push_back(c);
-    else
-      s.mesh_clusters.push_back(c);
-  }
+  s.classify(clusters, mode);
 
   GlRenderer& r = *s.renderer;
   const glm::mat4& view_projection = r.viewProjection();
@@ -299,17 +330,10 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   }
 
   if (!s.instance_clusters.empty() || (mode == ParametricMode::Tessellated && view.pass == InstancePass::Second)) {
-    InstanceLodView lod_view;
-    lod_view.eye = view.eye;
-    lod_view.view_projection = view_projection;
-    lod_view.pixel_scale = view.pixel_scale;
-    lod_view.near_m = view.near_m;
-    lod_view.tolerance_px = view.tolerance_px;
-    lod_view.min_feature_px = view.min_feature_px;
-    lod_view.pass = view.pass;
-    lod_view.box_hidden = view.box_hidden;
-    const InstanceLodStats lod_stats = s.instance_meshes->draw(
-        s.instance_clusters, lod_view, r.objectColorCount(), s.profile_instances);
+    InstanceLodStats lod_stats =
+        use_prepared ? s.prepared_stats
+                     : s.instance_meshes->prepare(s.instance_clusters, s.lodView(view), s.profile_instances);
+    s.instance_meshes->submit(view_projection, r.objectColorCount(), lod_stats);
     stats.clusters_drawn += static_cast<uint32_t>(s.instance_clusters.size());
     stats.instances_drawn += lod_stats.instances_drawn;
     stats.instances_occluded += lod_stats.instances_occluded;
@@ -334,8 +358,23 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.two_sided_triangles += mesh_stats.triangles_drawn;
     stats.meshes_built += mesh_stats.meshes_built;
   }
-  stats.cpu_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  stats.cpu_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count() +
+                 (use_prepared ? s.prepared_ms : 0.0);
   return stats;
+}
+
+void ParametricRenderer::prepare(std::span<const uint32_t> clusters, const ParametricView& view,
+                                 ParametricMode mode) {
+  Impl& s = *impl_;
+  s.prepared = false;
+  if (mode != ParametricMode::Tessellated) return;  // Auto too: resolving it asks GL
+  const auto start = Clock::now();
+  s.classify(clusters, ParametricMode::Tessellated);
+  s.prepared_stats = s.instance_meshes->prepare(s.instance_clusters, s.lodView(view), s.profile_instances);
+  s.prepared_clusters.assign(clusters.begin(), clusters.end());
+  s.prepared_pass = view.pass;
+  s.prepared_ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+  s.prepared = true;
 }
 
 }  // namespace tw

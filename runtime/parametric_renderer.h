@@ -73,7 +73,7 @@ struct ParametricDrawStats {
   uint64_t two_sided_triangles = 0;  // of mesh_triangles: drawn without back-face culling
   uint64_t instances_occluded = 0;   // tessellated mode, second pass: hidden one by one
   uint32_t meshes_built = 0;
-  double cpu_ms = 0.0;               // CPU time of the call (llvmpipe rasterizes later)
+  double cpu_ms = 0.0;  // CPU time of the call and of its prepare() (llvmpipe rasterizes later)
 };
 
 class ParametricRenderer {
@@ -94,6 +94,13 @@ class ParametricRenderer {
   // Same, into `framebuffer` (same size as the renderer's targets, with colour 0, ids 1, depth).
   ParametricDrawStats drawInto(unsigned framebuffer, std::span<const uint32_t> clusters,
                                const ParametricView& view, ParametricMode mode, uint64_t frame);
+
+  // Tessellated mode: the CPU half of the next draw() of the same clusters and pass (choosing
+  // and expanding each instance, ParametricInstanceMeshes::prepare), which makes no GL call and so
+  // may run on another thread while the GL thread submits other draws. That draw() then only
+  // submits; a draw() of other clusters or another pass drops it. Other modes, Auto included
+  // (resolving it needs GL): nothing. Not beside any other call on this object.
+  void prepare(std::span<const uint32_t> clusters, const ParametricView& view, ParametricMode mode);
 
   // Tessellated mode in hzb, after the frame's final-depth pyramid: which of the instances drawn
   // this frame are hidden, so the next frame's first pass leaves them to its second.

@@ -7,12 +7,17 @@
 
 #include <cmath>
 #include <numbers>
+#include <functional>
 #include <set>
+#include <thread>
 
 #include "camera_test_support.h"
 #include "camera_path.h"
 #include "egl_context.h"
 #include "frame_loop.h"
+#include "gl_renderer.h"
+#include "package_view.h"
+#include "parametric_renderer.h"
 #include "parametric_gpu.h"
 #include "preprocess_driver.h"
 #include "tessellate.h"
@@ -808,6 +813,67 @@ TEST_F(ParametricRendering, HzbCullsHiddenInstancesOfAVisibleCluster) {
   ASSERT_GT(far_id, 0u);
   EXPECT_EQ(walk->package().objects()[far_id - 1].id, 3u);
   EXPECT_EQ(up.parametric_instances_drawn, 2u);
+}
+
+// The frame loop expands the first pass's instances on a worker thread (prepare) while it submits
+// the meshes: the draw that follows must show exactly what a plain draw shows, and a prepare made
+// for other clusters must be dropped, not drawn.
+TEST_F(ParametricRendering, PreparedOnAnotherThreadDrawsTheSameAsADraw) {
+  const std::vector<Part> parts = {{1, Cylinder{0.3f, 3.0f, true}, placed({-1.5, 0, 0}, {0, 90, 0})},
+                                   {2, Sphere{0.6f}, placed({1.0, 1.0, 0.3})},
+                                   {3, Box{{0.5f, 0.4f, 0.3f}}, placed({0.5, -1.2, 0.0}, {0, 0, 30})}};
+  const fs::path package = buildPackage("prepared", parts, false);
+  PackageView view = PackageView::open(package, PackageView::Verify::Headers);
+  RendererOptions renderer_options;
+  renderer_options.width = kWidth;
+  renderer_options.height = kHeight;
+  GlRenderer renderer(renderer_options);
+  std::vector<uint32_t> colors;
+  for (const pkg::ObjectRecord& o : view.objects()) colors.push_back(o.color_rgba);
+  renderer.setObjectColors(colors);
+  ParametricRenderer parametric(view, renderer);
+  std::vector<uint32_t> clusters;
+  for (uint32_t c = 0; c < view.clusters().size(); ++c)
+    if (view.clusters()[c].kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+      clusters.push_back(c);
+  ASSERT_GE(clusters.size(), 2u);  // one per primitive type
+  const Camera camera = lookingAt(view.origin() + glm::dvec3(0.0, -6.0, 3.0), view.origin());
+  ParametricView pv;
+  pv.eye = camera.position - view.origin();
+  pv.forward = camera.forward();
+  pv.near_m = camera.near_m;
+  pv.pixel_scale = camera.pixelScale(kHeight);
+  const glm::mat4 rotation(camera.viewRotation());
+  const glm::mat4 projection(camera.projection(double(kWidth) / kHeight));
+  auto frame = [&](const std::function<void()>& before_draw, ParametricDrawStats* stats) {
+    renderer.beginFrame(rotation, projection);
+    before_draw();
+    *stats = parametric.draw(clusters, pv, ParametricMode::Tessellated, 1);
+    renderer.endFrame();
+    std::vector<uint32_t> ids;
+    renderer.readObjectIds(ids);
+    return ids;
+  };
+  ParametricDrawStats plain_stats, prepared_stats, dropped_stats;
+  const std::vector<uint32_t> plain = frame([] {}, &plain_stats);
+  const std::vector<uint32_t> prepared = frame(
+      [&] {
+        std::thread worker([&] { parametric.prepare(clusters, pv, ParametricMode::Tessellated); });
+        worker.join();
+      },
+      &prepared_stats);
+  const std::vector<uint32_t> dropped = frame(
+      [&] {
+        parametric.prepare(std::span(clusters).first(1), pv, ParametricMode::Tessellated);
+      },
+      &dropped_stats);
+  std::set<uint32_t> seen(plain.begin(), plain.end());
+  EXPECT_EQ(seen.size(), 4u);  // the three parts and the background
+  EXPECT_EQ(prepared, plain);
+  EXPECT_EQ(dropped, plain);
+  EXPECT_EQ(prepared_stats.instances_drawn, plain_stats.instances_drawn);
+  EXPECT_EQ(prepared_stats.mesh_triangles, plain_stats.mesh_triangles);
+  EXPECT_EQ(dropped_stats.mesh_triangles, plain_stats.mesh_triangles);
 }
 
 // The generated plant: most of it is parametric. Impostors show it; hzb with parametrics in pass
