@@ -582,6 +582,54 @@ void meshAppend(const TriangleMesh& mesh, TriangleMesh& out) {
 
 }  // namespace
 
+namespace {
+
+// Sign of the turn a -> b -> c (exact for float inputs: their differences and products fit a
+// double).
+int turn(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+  const double t = cross2(a, b, c);
+  return (t > 0.0) - (t < 0.0);
+}
+
+// Whether collinear point q lies on the closed segment a-b.
+bool onSegment(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& q) {
+  return std::min(a.x, b.x) <= q.x && q.x <= std::max(a.x, b.x) && std::min(a.y, b.y) <= q.y &&
+         q.y <= std::max(a.y, b.y);
+}
+
+// Whether the closed segments a-b and c-d share a point.
+bool segmentsMeet(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c, const glm::dvec2& d) {
+  const int t1 = turn(a, b, c), t2 = turn(a, b, d), t3 = turn(c, d, a), t4 = turn(c, d, b);
+  if (t1 * t2 < 0 && t3 * t4 < 0) return true;
+  return (t1 == 0 && onSegment(a, b, c)) || (t2 == 0 && onSegment(a, b, d)) ||
+         (t3 == 0 && onSegment(c, d, a)) || (t4 == 0 && onSegment(c, d, b));
+}
+
+}  // namespace
+
+bool extrusionEnclosesSolid(std::span<const glm::vec2> profile) {
+  if (profile.size() > kMaxSolidCheckPoints) return false;
+  Extrusion e{std::vector<glm::vec2>(profile.begin(), profile.end()), 1.0f};
+  if (!validExtrusion(e)) return false;
+  std::vector<glm::dvec2> p;
+  cleanProfile(e.profile, &p);
+  const size_t k = p.size();
+  for (size_t i = 0; i < k; ++i) {
+    const glm::dvec2 &a = p[i], &b = p[(i + 1) % k];
+    for (size_t j = i + 1; j < k; ++j) {
+      const glm::dvec2 &c = p[j], &d = p[(j + 1) % k];
+      if (j == i + 1) {  // b == c: they may only turn there, not fold back along each other
+        if (turn(a, b, d) == 0 && glm::dot(a - b, d - b) > 0.0) return false;
+      } else if (i == 0 && j == k - 1) {  // d == a
+        if (turn(c, a, b) == 0 && glm::dot(c - a, b - a) > 0.0) return false;
+      } else if (segmentsMeet(a, b, c, d)) {
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 uint32_t arcSegments(float radius, float sweep_rad, float tolerance) {
   const bool full = std::isfinite(sweep_rad) && isFullTurn(sweep_rad);
   const uint32_t min_segments = full ? 3u : 1u;

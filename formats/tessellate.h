@@ -5,7 +5,9 @@
 // "equivalent triangles" a scene represents. Output is in the geometry's local frame.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <span>
 
 #include "scene.h"
 
@@ -27,6 +29,16 @@ uint32_t arcSegments(float radius, float sweep_rad, float tolerance);
 void tessellatePrimitive(const Primitive& primitive, float tolerance, TriangleMesh& out);
 void tessellateNurbs(const NurbsPatchSet& patches, float tolerance, TriangleMesh& out);
 void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out);
+
+// Whether the triangles tessellatePrimitive makes of an extrusion with this profile enclose its
+// solid, every face wound counter-clockwise seen from outside, so that a renderer may cull their
+// back faces from an eye outside the solid: the profile (consecutive repeats and a closing copy of
+// the first point dropped) is a valid simple polygon, no two of its edges meeting except
+// neighbours at their shared corner. A profile that crosses or touches itself is still
+// triangulated, but its caps may overlap or leave gaps. Profiles of more than
+// kMaxSolidCheckPoints points are not checked (false), so hostile input costs no quadratic work.
+constexpr size_t kMaxSolidCheckPoints = 256;
+bool extrusionEnclosesSolid(std::span<const glm::vec2> profile);
 
 // Exactly the number of triangles the functions above would append, computed without building
 // them (cheap enough to call for every object of a 100M-triangle scene).

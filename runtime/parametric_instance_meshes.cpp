@@ -76,6 +76,9 @@ constexpr uint8_t kOrthogonalAxes = 16;
 // Roles in a sealed pipe run (sealed_pipe_runs.h): an open part whose inside cannot be seen from
 // outside the run, and a closed solid that closes one of its ends.
 constexpr uint8_t kRunMember = 32, kRunCloser = 64;
+// An extrusion whose triangles enclose its solid (extrusionEnclosesSolid): from outside, its back
+// faces are hidden by its front faces.
+constexpr uint8_t kClosedProfile = 128;
 
 // What the per-frame choice reads of an instance, prepared once.
 struct InstanceBounds {
@@ -89,7 +92,8 @@ struct InstanceBounds {
   glm::vec3 origin{0.0f};  // the canonical frame's origin, relative to the anchor
   glm::vec3 axis{0.0f};    // tubes: from the base centre (origin) to the top centre
   uint8_t type = 0;
-  uint8_t flags = 0;       // kValid, kCapped, kMirrored, kRectangleProfile, kOrthogonalAxes
+  uint8_t flags = 0;       // kValid, kCapped, kMirrored, kRectangleProfile, kOrthogonalAxes,
+                           // kRunMember, kRunCloser, kClosedProfile
 };
 
 // An open tube's inside can only be seen through its end discs, so from an eye between the two
@@ -195,6 +199,7 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
     }
     const double box_area = double(hi.x - lo.x) * double(hi.y - lo.y);
     if (std::abs(0.5 * std::abs(area2) - box_area) <= 1e-5 * box_area) b.flags |= kRectangleProfile;
+    if (extrusionEnclosesSolid(profile)) b.flags |= kClosedProfile;
   }
   return b;
 }
@@ -724,7 +729,10 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     if (view.pass != InstancePass::All) s.drawn.push_back({c, i});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
-      profiles.push_back({c, i, distance});
+      FaceCull cull = FaceCull::None;
+      if ((b.flags & kClosedProfile) && eyeOutsideSolid(b, -anchor_eye, near_reach))
+        cull = (b.flags & kMirrored) ? FaceCull::BackOfCw : FaceCull::BackOfCcw;
+      profiles.push_back({c, i, distance, cull});
       return;
     }
     stats.thin_instances += form.batch == kLines || form.batch == kPoints;

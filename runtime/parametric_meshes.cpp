@@ -207,10 +207,12 @@ struct ParametricMeshes::Impl {
   uint64_t cached_bytes = 0;
   std::vector<ParametricVertex> vertices;  // build scratch
   std::vector<uint32_t> indices;
-  // drawInstances scratch: instance offsets in the cluster by bucket, the multi-draw ranges.
-  std::array<std::vector<uint32_t>, kBucketCount> by_bucket;
-  std::vector<GLsizei> counts;
-  std::vector<const void*> offsets;
+  // drawInstances scratch: (instance offset in the cluster, face culling) by bucket, the
+  // multi-draw ranges by face culling.
+  static constexpr size_t kCullKinds = 3;  // FaceCull's values
+  std::array<std::vector<std::pair<uint32_t, FaceCull>>, kBucketCount> by_bucket;
+  std::array<std::vector<GLsizei>, kCullKinds> counts;
+  std::array<std::vector<const void*>, kCullKinds> offsets;
 
   ~Impl() {
     for (auto& [key, mesh] : cache) release(mesh);
@@ -351,6 +353,7 @@ ParametricMeshStats ParametricMeshes::draw(std::span<const uint32_t> clusters,
     ++stats.clusters_drawn;
     stats.instances_drawn += s.view->clusters()[cluster].instance_count;
     stats.triangles_drawn += mesh->index_count / 3;
+    stats.two_sided_triangles += mesh->index_count / 3;
   }
   s.endDraw(frame, stats);
   return stats;
@@ -389,7 +392,7 @@ ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMe
                                  std::max(pixel_scale, 1e-9);
         while (bucket + 1 < kBucketCount && bucketToleranceM(bucket + 1) <= allowed_m) ++bucket;
       }
-      by_bucket[size_t(bucket)].push_back(i - record.instance_first);
+      by_bucket[size_t(bucket)].push_back({i - record.instance_first, instances[j].cull});
     }
     const glm::vec3 anchor_eye(clusterAnchor(record) - eye);
     bool drawn = false;
@@ -398,34 +401,54 @@ ParametricMeshStats ParametricMeshes::drawInstances(std::span<const ParametricMe
       CachedMesh* mesh = s.meshFor(cluster, bucket, start, stats);
       mesh->last_used = frame;
       if (mesh->index_count == 0 || mesh->instance_offsets.size() != record.instance_count + 1u) continue;
-      counts.clear();
-      offsets.clear();
-      for (uint32_t local : by_bucket[size_t(bucket)]) {
+      for (size_t kind = 0; kind < Impl::kCullKinds; ++kind) {
+        counts[kind].clear();
+        offsets[kind].clear();
+      }
+      for (const auto& [local, cull] : by_bucket[size_t(bucket)]) {
         const uint32_t first = mesh->instance_offsets[local], last = mesh->instance_offsets[local + 1];
         if (last <= first) continue;
-        // Consecutive instances merge into one range.
-        if (!counts.empty() &&
-            reinterpret_cast<uintptr_t>(offsets.back()) + uintptr_t(counts.back()) * sizeof(uint32_t) ==
+        // Consecutive instances alike in face culling merge into one range.
+        std::vector<GLsizei>& kind_counts = counts[size_t(cull)];
+        std::vector<const void*>& kind_offsets = offsets[size_t(cull)];
+        if (!kind_counts.empty() &&
+            reinterpret_cast<uintptr_t>(kind_offsets.back()) + uintptr_t(kind_counts.back()) * sizeof(uint32_t) ==
                 uintptr_t(first) * sizeof(uint32_t)) {
-          counts.back() += GLsizei(last - first);
+          kind_counts.back() += GLsizei(last - first);
         } else {
-          counts.push_back(GLsizei(last - first));
-          offsets.push_back(reinterpret_cast<const void*>(uintptr_t(first) * sizeof(uint32_t)));
+          kind_counts.push_back(GLsizei(last - first));
+          kind_offsets.push_back(reinterpret_cast<const void*>(uintptr_t(first) * sizeof(uint32_t)));
         }
         stats.triangles_drawn += (last - first) / 3;
+        if (cull == FaceCull::None) stats.two_sided_triangles += (last - first) / 3;
         ++stats.instances_drawn;
       }
-      if (counts.empty()) continue;
-      glProgramUniform3fv(s.program, gl::kParamMeshAnchorLocation, 1, &anchor_eye[0]);
-      glVertexArrayVertexBuffer(s.vertex_array, 0, mesh->vertex_buffer, 0, sizeof(ParametricVertex));
-      glVertexArrayElementBuffer(s.vertex_array, mesh->index_buffer);
-      glMultiDrawElements(GL_TRIANGLES, counts.data(), GL_UNSIGNED_INT, offsets.data(),
-                          GLsizei(counts.size()));
-      drawn = true;
+      bool bound = false;
+      for (size_t kind = 0; kind < Impl::kCullKinds; ++kind) {
+        if (counts[kind].empty()) continue;
+        if (!bound) {
+          glProgramUniform3fv(s.program, gl::kParamMeshAnchorLocation, 1, &anchor_eye[0]);
+          glVertexArrayVertexBuffer(s.vertex_array, 0, mesh->vertex_buffer, 0, sizeof(ParametricVertex));
+          glVertexArrayElementBuffer(s.vertex_array, mesh->index_buffer);
+          bound = true;
+        }
+        if (FaceCull(kind) == FaceCull::None) {
+          glDisable(GL_CULL_FACE);
+        } else {
+          glEnable(GL_CULL_FACE);
+          glCullFace(GL_BACK);
+          glFrontFace(FaceCull(kind) == FaceCull::BackOfCw ? GL_CW : GL_CCW);
+        }
+        glMultiDrawElements(GL_TRIANGLES, counts[kind].data(), GL_UNSIGNED_INT,
+                            offsets[kind].data(), GLsizei(counts[kind].size()));
+        drawn = true;
+      }
     }
     stats.clusters_drawn += drawn;
     k = end;
   }
+  glDisable(GL_CULL_FACE);
+  glFrontFace(GL_CCW);
   s.endDraw(frame, stats);
   return stats;
 }

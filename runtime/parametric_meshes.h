@@ -64,12 +64,18 @@ void tessellateCluster(const PackageView& view, uint32_t cluster, float toleranc
                        std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices,
                        std::vector<uint32_t>* instance_offsets = nullptr);
 
+// Which faces of an instance a draw may skip: none (an open surface, or the eye inside the solid
+// or near it), or the back faces of a closed solid seen from outside, whose front faces wind
+// counter-clockwise on screen (clockwise under a mirroring transform).
+enum class FaceCull : uint8_t { None, BackOfCcw, BackOfCw };
+
 // One instance of a parametric cluster to draw from the cluster's mesh, at the resolution its own
 // distance asks for.
 struct ParametricMeshInstance {
   uint32_t cluster = 0;
   uint32_t instance = 0;     // index into the instance table, within the cluster's range
   double distance_m = 0.0;   // from the eye to the instance's nearest point (bounding sphere)
+  FaceCull cull = FaceCull::None;
 };
 
 // The box an instance's primitive fills in its canonical frame: tight for cylinders, cones,
@@ -87,6 +93,7 @@ struct ParametricMeshStats {
   uint32_t clusters_drawn = 0;
   uint64_t instances_drawn = 0;
   uint64_t triangles_drawn = 0;
+  uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
   uint32_t meshes_built = 0;      // this call
   uint32_t meshes_cached = 0;     // after this call
   uint64_t cached_bytes = 0;
@@ -114,7 +121,8 @@ class ParametricMeshes {
                            uint32_t object_color_count, uint64_t frame);
   // Draws single instances, each from its cluster's mesh at the bucket of its own distance with
   // `tolerance_px` (consecutive entries of one cluster share its meshes; one multi-draw per
-  // cluster mesh used). Same GL contract as draw().
+  // cluster mesh used and face culling asked for), back faces culled as each entry's `cull`
+  // says. Same GL contract as draw(); face culling is left off.
   ParametricMeshStats drawInstances(std::span<const ParametricMeshInstance> instances,
                                     const glm::dvec3& eye, const glm::mat4& view_projection,
                                     double pixel_scale, double tolerance_px,

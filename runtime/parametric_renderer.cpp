@@ -344,7 +344,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
         r.objectColorCount(), frame);
     stats.instances_drawn += profile_stats.instances_drawn;
     stats.mesh_triangles += profile_stats.triangles_drawn;
-    stats.two_sided_triangles += profile_stats.triangles_drawn;
+    stats.two_sided_triangles += profile_stats.two_sided_triangles;
     stats.meshes_built += profile_stats.meshes_built;
   }
   if (!s.mesh_clusters.empty()) {

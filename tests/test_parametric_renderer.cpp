@@ -775,6 +775,47 @@ TEST_F(ParametricRendering, FarExtrusionIsItsBox) {
   EXPECT_LT(g.mismatchShare(), 0.35) << g.mismatched << " of " << g.covered;
 }
 
+// Extrusions drawn from their profile: a closed one (an I-beam, plain or mirrored) seen from
+// outside has its back faces culled and looks like the fine mesh; with the eye inside its box, or
+// with a profile that crosses itself, both faces are drawn.
+TEST_F(ParametricRendering, ClosedExtrusionCullsBackFacesFromOutside) {
+  const std::vector<glm::vec2> beam = {{-0.3f, -0.6f}, {0.3f, -0.6f}, {0.3f, -0.52f},
+                                       {0.04f, -0.52f}, {0.04f, 0.52f}, {0.3f, 0.52f},
+                                       {0.3f, 0.6f},   {-0.3f, 0.6f}, {-0.3f, 0.52f},
+                                       {-0.04f, 0.52f}, {-0.04f, -0.52f}, {-0.3f, -0.52f}};
+  Transform mirrored = placed({0, 0, 0}, {-90, 0, 0});
+  mirrored.linear = mirrored.linear * glm::mat3(glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1));
+  ASSERT_LT(glm::determinant(mirrored.linear), 0.0f);
+  const Camera outside = lookingAt({3.0, -2.5, 1.8}, {0.0, 3.0, 0.0});
+  for (const Transform& t : {placed({0, 0, 0}, {-90, 0, 0}), mirrored}) {
+    const Part part{1, Extrusion{beam, 6.0f}, t};
+    const Frame culled = render(buildPackage("closed_beam", {part}, false), outside,
+                                ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+    const Frame mesh = render(buildPackage("closed_beam_mesh", {part}, true), outside,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_GT(culled.stats.parametric_triangles, 12u);  // the profile, not the box
+    EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+    const Agreement g = compare(culled, mesh, 2e-3);
+    EXPECT_GT(g.covered, size_t(kWidth * kHeight / 20));
+    EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+    EXPECT_GT(g.depthShare(), 0.99);  // the near faces, not the far ones
+  }
+  // Standing in the web's recess, inside the beam's box: both faces.
+  const Part part{1, Extrusion{beam, 6.0f}, placed({0, 0, 0}, {-90, 0, 0})};
+  const Camera recess = lookingAt({0.2, 1.0, 0.0}, {0.2, 5.0, 0.3});
+  const Frame inside = render(buildPackage("closed_beam", {part}, false), recess,
+                              ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+  EXPECT_GT(inside.stats.parametric_two_sided_triangles, 0u);
+  // A profile that crosses itself (an uneven bow tie): its caps do not close it.
+  const std::vector<glm::vec2> bow_tie = {{0.0f, 0.0f}, {0.6f, 0.6f}, {0.6f, 0.0f}, {0.0f, 0.3f}};
+  const Part crossed{1, Extrusion{bow_tie, 6.0f}, placed({0, 0, 0}, {-90, 0, 0})};
+  const Frame crossed_frame = render(buildPackage("crossed_beam", {crossed}, false), outside,
+                                     ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+  EXPECT_GT(crossed_frame.stats.parametric_triangles, 0u);
+  EXPECT_EQ(crossed_frame.stats.parametric_two_sided_triangles,
+            crossed_frame.stats.parametric_triangles);
+}
+
 // hzb, tessellated mode: two spheres in one parametric cluster, one in front of a mesh wall and
 // one behind it. The cluster is visible, so only the instance test can leave the hidden sphere
 // out: it does, the image equals the unculled redraw, and when the camera rises above the wall

@@ -347,6 +347,34 @@ TEST(PrimitiveTessellation, ConcaveCapsAreProperlyTriangulated) {
   }
 }
 
+// Renderers cull an extrusion's back faces only when its triangles enclose the solid: simple
+// profiles in either winding, with repeated points, yes; profiles that cross, touch or fold back
+// on themselves, or are degenerate, no.
+TEST(PrimitiveTessellation, ExtrusionEnclosesItsSolidOnlyWhenTheProfileIsSimple) {
+  using Profile = std::vector<glm::vec2>;
+  auto encloses = [](const Profile& p) { return extrusionEnclosesSolid(std::span(p)); };
+  Profile beam = iProfile().profile;
+  EXPECT_TRUE(encloses(beam));
+  std::reverse(beam.begin(), beam.end());
+  EXPECT_TRUE(encloses(beam));  // clockwise: the tessellation turns it round
+  EXPECT_TRUE(encloses({{0, 0}, {1, 0}, {1, 0}, {0, 1}, {0, 0}}));  // a repeat and a closing copy
+  EXPECT_TRUE(encloses({{0, 0}, {2, 0}, {2, 2}, {1, 2}, {1, 1}, {0, 1}}));  // L-shaped (concave)
+  EXPECT_FALSE(encloses({{0, 0}, {1, 1}, {1, 0}, {0, 1}}));   // bow tie: two edges cross
+  EXPECT_FALSE(encloses({{0, 0}, {2, 0}, {2, 2}, {1, 0}, {0, 2}}));  // a corner touches an edge
+  EXPECT_FALSE(encloses({{0, 0}, {2, 0}, {1, 0}, {1, 1}}));   // folds back along its first edge
+  EXPECT_FALSE(encloses({{0, 0}, {1, 0}, {2, 0}}));           // no area
+  EXPECT_FALSE(encloses({{0, 0}, {1, 0}}));                   // too few points
+  EXPECT_FALSE(encloses({{0, 0}, {1, 0}, {NAN, 1}}));         // not finite
+  Profile many;  // a simple polygon with more points than are checked
+  for (size_t i = 0; i <= kMaxSolidCheckPoints; ++i) {
+    const float a = float(2.0 * kPi * double(i) / double(kMaxSolidCheckPoints + 1));
+    many.push_back({std::cos(a), std::sin(a)});
+  }
+  EXPECT_FALSE(encloses(many));
+  many.resize(kMaxSolidCheckPoints);
+  EXPECT_TRUE(encloses(many));
+}
+
 TEST(PrimitiveTessellation, ConvexPrimitiveNormalsPointAwayFromCentre) {
   for (const Primitive& p : {Primitive{Sphere{1.0f}}, Primitive{Box{{1.0f, 2.0f, 0.5f}}}}) {
     const TriangleMesh m = build(p, 0.01f);
