@@ -75,6 +75,19 @@ void BM_HzbBuildCpu(benchmark::State& state) {
   state.SetItemsProcessed(int64_t(state.iterations()) * kWidth * kHeight);
 }
 
+// As the frame loop builds it: into the same pyramid frame after frame, level 0 filled in place.
+void BM_HzbRebuildCpu(benchmark::State& state) {
+  const std::vector<float>& depth = depthImage();
+  HzbPyramid pyramid;
+  for (auto _ : state) {
+    const std::span<float> base = pyramid.beginBuild(kWidth, kHeight);
+    std::copy(depth.begin(), depth.end(), base.begin());  // stands in for the read-back
+    pyramid.finishBuild();
+    benchmark::DoNotOptimize(pyramid.level(pyramid.levelCount() - 1).data());
+  }
+  state.SetItemsProcessed(int64_t(state.iterations()) * kWidth * kHeight);
+}
+
 // One context and one uploaded depth texture for the whole program; null when EGL fails.
 struct GpuState {
   std::unique_ptr<EglContext> egl;
@@ -216,6 +229,7 @@ void BM_HzbOccludedOnly(benchmark::State& state) {
 }
 
 BENCHMARK(BM_HzbBuildCpu)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_HzbRebuildCpu)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_HzbBuildGpu)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HzbBuildGpuReadBack)->Arg(0)->Arg(3)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_HzbDepthReadBackCpuBuild)->Unit(benchmark::kMillisecond)->UseRealTime();

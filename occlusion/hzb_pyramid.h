@@ -43,6 +43,10 @@ class HzbPyramid {
   static HzbPyramid fromDepth(std::span<const float> depth, int width, int height);
   // The same into this pyramid, reusing its storage (the frame loop rebuilds it every frame).
   void build(std::span<const float> depth, int width, int height);
+  // The same without the copy: beginBuild sizes the levels and returns level 0 for the caller to
+  // fill with the depth image (a read-back straight into it); finishBuild makes the others.
+  std::span<float> beginBuild(int width, int height);
+  void finishBuild();
 
   // The level-0 size, the number of levels and each level's size.
   int width() const { return width_; }
@@ -55,7 +59,8 @@ class HzbPyramid {
   int firstLevel() const { return first_level_; }
 
   // For the GPU read-back: sets the level sizes for a width x height depth buffer and keeps room
-  // for levels [first_level, levelCount()); fill them through mutableLevel.
+  // for levels [first_level, levelCount()), whose values are left as they were (stale) until
+  // filled through mutableLevel.
   void reset(int width, int height, int first_level);
   std::span<float> mutableLevel(int level);
 

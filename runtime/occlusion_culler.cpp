@@ -208,12 +208,12 @@ void OcclusionCuller::buildAndReadBack(unsigned depth_texture, int width, int he
   glFinish();
   const auto start = Clock::now();
   if (cpu_build_) {
-    depth_scratch_.resize(size_t(width) * size_t(height));
+    const std::span<float> base = pyramid_.beginBuild(width, height);
     glBindBuffer(GL_PIXEL_PACK_BUFFER, 0);
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glGetTextureImage(depth_texture, 0, GL_DEPTH_COMPONENT, GL_FLOAT,
-                      GLsizei(depth_scratch_.size() * sizeof(float)), depth_scratch_.data());
-    pyramid_.build(depth_scratch_, width, height);
+    glGetTextureImage(depth_texture, 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(base.size_bytes()),
+                      base.data());
+    pyramid_.finishBuild();
   } else {
     builder_->build(depth_texture, width, height);
     builder_->readBack(pyramid_, hzbTestLevel(width, height, hzb_options_.read_width_px));

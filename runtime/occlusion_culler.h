@@ -206,7 +206,6 @@ class OcclusionCuller {
   const PackageView* view_;
   HzbOptions hzb_options_;
   bool cpu_build_ = false;           // resolved from hzb_options_.build by ensureGl
-  std::vector<float> depth_scratch_;
   VisibilityView visibility_;
   std::unique_ptr<PvsMapping> pvs_;
   uint32_t pvs_cell_ = UINT32_MAX;   // grid index whose flags pvs_flags_ hold

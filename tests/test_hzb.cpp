@@ -145,6 +145,29 @@ TEST(HzbPyramid, EveryTexelIsTheMinimumOverItsFootprint) {
   }
 }
 
+// The frame loop rebuilds one pyramid in place (beginBuild, a read-back into level 0,
+// finishBuild), its levels not cleared in between: whatever came before, the result is the
+// pyramid of this depth image.
+TEST(HzbPyramid, RebuildInPlaceEqualsAFreshBuild) {
+  std::mt19937 rng(11);
+  HzbPyramid reused;
+  const std::vector<glm::ivec2> sizes = {{97, 61}, {13, 9}, {128, 72}, {31, 2}, {97, 61}};
+  for (const glm::ivec2 size : sizes) {
+    const std::vector<float> depth = randomDepth(size.x, size.y, rng);
+    const std::span<float> base = reused.beginBuild(size.x, size.y);
+    ASSERT_EQ(base.size(), depth.size());
+    std::copy(depth.begin(), depth.end(), base.begin());
+    reused.finishBuild();
+    const HzbPyramid fresh = HzbPyramid::fromDepth(depth, size.x, size.y);
+    ASSERT_EQ(reused.levelCount(), fresh.levelCount());
+    for (int k = 0; k < fresh.levelCount(); ++k) {
+      const std::span<const float> a = reused.level(k), b = fresh.level(k);
+      EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end()))
+          << size.x << "x" << size.y << " level " << k;
+    }
+  }
+}
+
 TEST(HzbPyramid, OddColumnIsNotLost) {
   // 3x1: the only near pixel is the odd last one; level 1 (1x1) must still see the far one.
   const std::vector<float> depth = {0.9f, 0.9f, 0.1f};
