@@ -9,9 +9,9 @@
 // points (InstanceLodView::thin_px), extrusions whose profile detail is below tolerance their box.
 // Instances outside the frustum's side planes or whose bounding sphere projects below
 // min_feature_px are dropped. Closed surfaces seen from outside the solid (not merely outside
-// its bounding sphere), open tubes seen from between their end planes, and the open tubes and
-// elbows of sealed pipe runs while the eye is clear of every such run (sealed_pipe_runs.h) have
-// their back faces culled.
+// its bounding sphere; extrusions too, when their profile is simple), open tubes seen from
+// between their end planes, and the open tubes and elbows of sealed pipe runs while the eye is
+// clear of every such run (sealed_pipe_runs.h) have their back faces culled.
 // How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
 // formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
 // every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex
@@ -99,8 +99,9 @@ class ParametricInstanceMeshes {
   // framebuffer with the caller's depth state, reading the instance table the caller bound at
   // gpu::kInstanceBinding (parametric_gpu.h: origins relative to their cluster's anchor) and the
   // object colours at gl_shaders.h kObjectColorBinding. Extrusions and revolutions that need
-  // their surface are not drawn: they are listed in `profiles` (by cluster, with their distance)
-  // for ParametricMeshes::drawInstances.
+  // their surface are not drawn: they are listed in `profiles` (by cluster, with their distance,
+  // and with their back faces to cull when a closed extrusion is seen from outside) for
+  // ParametricMeshes::drawInstances.
   // prepare() then submit().
   InstanceLodStats draw(std::span<const uint32_t> clusters, const InstanceLodView& view,
                         uint32_t object_color_count, std::vector<ParametricMeshInstance>& profiles);
