@@ -1,0 +1,531 @@
+// Tessellated mode on llvmpipe: each visible parametric instance drawn at the resolution its own
+// distance asks for (parametric_instance_meshes.h), against impostors and fine meshes: coverage,
+// resolution by distance, thin pipes as lines, coarse pipes' width and shading, back faces culled
+// only where hidden (closed solids from outside, sealed pipe runs, closed extrusions), far
+// extrusions as boxes, instance-by-instance occlusion, and the first pass prepared on another
+// thread.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <set>
+#include <span>
+#include <thread>
+
+#include "gl_renderer.h"
+#include "package_view.h"
+#include "parametric_render_support.h"
+#include "parametric_renderer.h"
+
+namespace tw {
+namespace {
+
+using namespace parametric_test;
+
+// Tessellated mode (meshes by distance) covers what impostor mode covers, within a silhouette
+// band, for every type.
+TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
+  std::vector<Part> parts;
+  uint32_t id = 1;
+  for (const TypeCase& c : typeCases()) {
+    Part p{id, c.primitive, c.transform};
+    p.transform.origin += glm::dvec3(2.6 * (id - 1), 0.0, 0.0);
+    parts.push_back(p);
+    ++id;
+  }
+  const fs::path pkg = buildPackage("all_types", parts, false);
+  const Camera camera = lookingAt({6.5, -9.0, 3.0}, {6.5, 0.0, 0.5});
+  const Frame impostor = render(pkg, camera, ParametricMode::Impostor);
+  const Frame tessellated = render(pkg, camera, ParametricMode::Tessellated);
+  EXPECT_GT(tessellated.stats.parametric_triangles, 100u);
+  EXPECT_EQ(tessellated.stats.parametric_instances_drawn, parts.size());
+  Agreement g = compare(impostor, tessellated, 5e-3);
+  EXPECT_GT(g.covered, 2000u);
+  EXPECT_LT(g.mismatchShare(), 0.03) << g.mismatched << " of " << g.covered;
+  // Half a pixel of chordal error at about 9 m is up to 2.7 cm: depth agrees to about 1 cm.
+  EXPECT_LT(g.depthQuantile(0.5), 3e-3);
+  EXPECT_GT(g.depthShare(), 0.8);
+}
+
+// Tessellated mode, each type on its own against the same primitive tessellated at 0.1 mm: the
+// per-instance meshes (unit meshes shaped by the instance's parameters, at a quarter pixel of
+// chordal error here) cover the same pixels with the same ids, at nearly the same depth.
+TEST_F(ParametricRendering, TessellatedEachTypeMatchesAFineTessellation) {
+  const Camera camera = lookingAt({3.2, -2.4, 2.2}, {0.0, 0.0, 0.7});
+  std::vector<TypeCase> cases = typeCases();
+  // Revolutions are swept from their own profile, simplified to the tolerance: a vessel with
+  // elliptical heads (on the axis at both ends), whole and as a half turn.
+  std::vector<glm::vec2> vessel;
+  for (int k = 0; k <= 8; ++k) {
+    const double a = 0.5 * std::numbers::pi * k / 8;
+    vessel.push_back({float(0.6 * std::sin(a)), float(0.3 * (1.0 - std::cos(a)))});
+  }
+  for (int k = 8; k >= 0; --k) {
+    const double a = 0.5 * std::numbers::pi * k / 8;
+    vessel.push_back({float(0.6 * std::sin(a)), float(1.2 + 0.3 * std::cos(a))});
+  }
+  cases.push_back({"revolution", Revolution{vessel, 6.2831853f}, placed({0, 0, 0}, {10, -20, 0})});
+  cases.push_back({"half_revolution", Revolution{vessel, 3.1415927f}, placed({0, 0, 0}, {0, 0, 200})});
+  for (const TypeCase& c : cases) {
+    SCOPED_TRACE(c.name);
+    const std::vector<Part> parts = {{1, c.primitive, c.transform}};
+    const fs::path package = buildPackage(std::string("imp_") + c.name, parts, false);
+    const Frame tessellated = render(package, camera, ParametricMode::Tessellated);
+    const Frame mesh = render(buildPackage(std::string("mesh_") + c.name, parts, true), camera,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_EQ(tessellated.stats.parametric_instances_drawn, 1u);
+    EXPECT_GT(tessellated.stats.parametric_triangles, 10u);
+    Agreement g = compare(tessellated, mesh, 2e-3);
+    EXPECT_GT(g.covered, 1000u);
+    EXPECT_LT(g.mismatchShare(), 0.02) << g.mismatched << " of " << g.covered;
+    // A quarter pixel at about 4.5 m is about 7 mm, 1.5e-3 of the distance: the facets lie
+    // within it of the surface.
+    EXPECT_LT(g.depthQuantile(0.5), 2e-3);
+    EXPECT_LT(g.depthQuantile(0.95), 5e-3) << g.depth_close << " of " << g.both;
+    // Colour: curved surfaces carry their true normals, so even a coarse mesh (4 px of chordal
+    // error) shades much like the fine one; compare per pixel where both show the object. (With
+    // facet normals, as the mesh pass has, the sphere and the torus match on under 40 % here.)
+    const Frame coarse = render(package, camera, ParametricMode::Tessellated, OcclusionMode::Off,
+                                nullptr, false, 4.0);
+    size_t close = 0, both = 0;
+    for (size_t i = 0; i < coarse.ids.size(); ++i) {
+      if (coarse.ids[i] == 0 || mesh.ids[i] == 0) continue;
+      ++both;
+      int worst = 0;
+      for (int k = 0; k < 3; ++k)
+        worst = std::max(worst, std::abs(int(coarse.rgba[4 * i + k]) - int(mesh.rgba[4 * i + k])));
+      close += worst <= 8;
+    }
+    if (!std::holds_alternative<Revolution>(c.primitive)) {  // faceted, like the reference
+      EXPECT_GT(double(close) / std::max<size_t>(both, 1), 0.5) << close << " of " << both;
+    }
+  }
+}
+
+// Standing under a deck beside a long capped pipe, the eye is inside both bounding spheres but
+// outside both solids: their back faces are hidden, so they are culled (with the sphere test
+// alone, all of both were drawn two-sided). The picture is unchanged: it matches the fine
+// meshes, which draw both faces. Inside a room-sized box, its faces must stay two-sided.
+TEST_F(ParametricRendering, BackFacesCulledOutsideTheSolidNotItsSphere) {
+  const Part deck{1, Box{{4.0f, 4.0f, 0.075f}}, placed({0, 0, 2.0})};
+  const Part pipe{2, Cylinder{0.1f, 12.0f, true}, placed({-6, 0.5, 1.6}, {0, 90, 0})};
+  const Camera camera = lookingAt({0.0, -0.8, 0.3}, {0.5, 0.6, 2.0});
+  const Frame culled = render(buildPackage("backfaces", {deck, pipe}, false), camera,
+                              ParametricMode::Tessellated);
+  const Frame mesh = render(buildPackage("backfaces_mesh", {deck, pipe}, true), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(culled.stats.parametric_instances_drawn, 2u);
+  EXPECT_GT(culled.stats.parametric_triangles, 20u);
+  EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+  Agreement g = compare(culled, mesh, 2e-3);
+  EXPECT_GT(g.covered, size_t(kWidth * kHeight / 2));
+  EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+  EXPECT_EQ(idAt(culled, pixelOf(camera, {0.5, 0.5, 1.6})), 2u);
+
+  const Part room{1, Box{{2.0f, 2.0f, 1.5f}}, placed({0, 0, 1.5})};
+  const Camera inside = lookingAt({0.0, 0.0, 1.5}, {1.0, 0.3, 1.6});
+  const Frame room_frame = render(buildPackage("backfaces_room", {room}, false), inside,
+                                  ParametricMode::Tessellated);
+  EXPECT_GT(room_frame.stats.parametric_two_sided_triangles, 0u);
+  size_t walls = 0;
+  for (uint32_t id : room_frame.ids) walls += id == 1u;  // the package's first object
+  EXPECT_EQ(walls, room_frame.ids.size());
+
+  // A sheared capped cylinder (its axis leans 0.8 m per metre along x): its caps stick out past
+  // the planes through the axis's ends, so the tube test does not apply, and from inside its
+  // walls fill the image.
+  Transform sheared;
+  sheared.origin = {0.0, 0.0, 0.0};
+  sheared.linear = glm::mat3(glm::vec3(1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0.8f, 0, 1));
+  const Part leaning{1, Cylinder{1.0f, 2.0f, true}, sheared};
+  const Camera in_cylinder = lookingAt({-0.66, 0.0, 0.3}, {0.5, 0.2, 0.9});
+  const Frame leaning_frame = render(buildPackage("backfaces_sheared", {leaning}, false),
+                                     in_cylinder, ParametricMode::Tessellated);
+  size_t wall_px = 0;
+  for (uint32_t id : leaning_frame.ids) wall_px += id == 1u;
+  EXPECT_EQ(wall_px, leaning_frame.ids.size());
+}
+
+// A pipe run of the plant's shape (sealed_pipe_runs.h): flange, spool along +x, a 90 degree
+// elbow, spool along +y, and (when `far_flange`) a flange closing the far end.
+std::vector<Part> pipeRun(bool far_flange) {
+  const float r = 0.4f, bend = 1.0f, length = 3.0f;
+  auto flange_at = [&](uint32_t id, const glm::dvec3& centre, const glm::vec3& axis_deg,
+                       const glm::dvec3& dir) {
+    return Part{id, Cylinder{1.5f * r, 0.1f, true}, placed(centre - 0.05 * dir, axis_deg)};
+  };
+  Transform elbow;
+  elbow.origin = {length, bend, 0.0};
+  elbow.linear = glm::mat3(glm::vec3(0, -1, 0), glm::vec3(1, 0, 0), glm::vec3(0, 0, 1));
+  std::vector<Part> parts = {
+      flange_at(1, {0, 0, 0}, {0, 90, 0}, {1, 0, 0}),
+      Part{2, Cylinder{r, length, false}, placed({0, 0, 0}, {0, 90, 0})},
+      Part{3, TorusSegment{bend, r, 0.5f * std::numbers::pi_v<float>}, elbow},
+      Part{4, Cylinder{r, length, false}, placed({length + bend, bend, 0}, {-90, 0, 0})}};
+  if (far_flange)
+    parts.push_back(flange_at(5, {length + bend, bend + length, 0}, {-90, 0, 0}, {0, 1, 0}));
+  return parts;
+}
+
+// Seen from beyond the first spool's end plane, the open spools and the elbow of a run closed by
+// flanges have their back faces culled, and the picture is the fine mesh's; left open at one end,
+// the run is drawn with both faces; with the eye inside it, too, and its inside fills the view.
+TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
+  const Camera outside = lookingAt({-1.5, -1.2, 1.2}, {2.0, 1.0, 0.0});
+  const fs::path sealed = buildPackage("sealed_run", pipeRun(true), false);
+  const Frame culled = render(sealed, outside, ParametricMode::Tessellated);
+  const Frame mesh = render(buildPackage("sealed_run_mesh", pipeRun(true), true), outside,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(culled.stats.parametric_instances_drawn, 5u);
+  EXPECT_GT(culled.stats.parametric_triangles, 100u);
+  EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+  Agreement g = compare(culled, mesh, 2e-3);
+  EXPECT_GT(g.covered, size_t(kWidth * kHeight / 20));
+  EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+
+  const Frame open = render(buildPackage("open_run", pipeRun(false), false), outside,
+                            ParametricMode::Tessellated);
+  EXPECT_GT(open.stats.parametric_two_sided_triangles, 100u);
+
+  // Inside the second spool, 1 m from the far flange, looking at it.
+  const Camera inside = lookingAt({4.0, 3.0, 0.0}, {4.0, 4.0, 0.05});
+  const Frame in_run = render(sealed, inside, ParametricMode::Tessellated);
+  EXPECT_GT(in_run.stats.parametric_two_sided_triangles, 100u);
+  size_t background = 0;
+  for (uint32_t id : in_run.ids) background += id == 0u;
+  EXPECT_EQ(background, 0u);
+}
+
+// Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
+// drawn with fewer segments, so the pair costs far less than twice the near one alone (a
+// per-cluster resolution would draw both at the near one's).
+TEST_F(ParametricRendering, TessellatedResolutionFollowsEachInstance) {
+  const Part near_pipe{1, Cylinder{0.3f, 2.0f, true}, placed({0, 0, 0})};
+  const Part far_pipe{2, Cylinder{0.3f, 2.0f, true}, placed({3, 10, 0})};
+  const Camera camera = lookingAt({0.0, -1.5, 1.0}, {1.5, 10.0, 1.0});
+  const Frame near_only = render(buildPackage("lod_near", {near_pipe}, false), camera,
+                                 ParametricMode::Tessellated);
+  const Frame both = render(buildPackage("lod_both", {near_pipe, far_pipe}, false), camera,
+                            ParametricMode::Tessellated);
+  EXPECT_EQ(both.stats.parametric_clusters_drawn, 1u);
+  EXPECT_EQ(both.stats.parametric_instances_drawn, 2u);
+  EXPECT_GT(near_only.stats.parametric_triangles, 100u);
+  EXPECT_GT(both.stats.parametric_triangles, near_only.stats.parametric_triangles);
+  EXPECT_LT(double(both.stats.parametric_triangles), 1.3 * near_only.stats.parametric_triangles);
+  // The far pipe is there all the same.
+  EXPECT_EQ(idAt(both, pixelOf(camera, {3.0, 10.0, 1.0})), 2u);
+}
+
+// A pipe thinner than a pixel (0.7 px across, 60 m away) is a continuous one-pixel line in
+// tessellated mode and costs no triangles; one of 0.2 px is left out (the true surface would
+// cover a fifth of the pixels along it). Impostors draw both as lines.
+TEST_F(ParametricRendering, ThinPipeIsAContinuousLineOrNothing) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 60.0, 0.0});
+  const double metres_per_px = 60.0 / camera.pixelScale(kHeight);
+  const glm::ivec2 a = pixelOf(camera, {-8.0, 60.0, 0.0}), b = pixelOf(camera, {8.0, 60.0, 0.0});
+  ASSERT_GT(b.x - a.x, 40);
+  auto columnsHit = [&](const Frame& f) {
+    int columns = 0;
+    for (int x = a.x; x <= b.x; ++x) {
+      bool hit = false;
+      for (int dy = -1; dy <= 1; ++dy) hit = hit || idAt(f, {x, a.y + dy}) == 1u;
+      columns += hit;
+    }
+    return columns;
+  };
+  for (double width_px : {0.7, 0.2}) {
+    SCOPED_TRACE(width_px);
+    const float radius = static_cast<float>(0.5 * width_px * metres_per_px);
+    const fs::path pkg = buildPackage(
+        "thin" + std::to_string(int(width_px * 10)),
+        {{1, Cylinder{radius, 20.0f, false}, placed({-10, 60, 0}, {0, 90, 0})}}, false);
+    const Frame f = render(pkg, camera, ParametricMode::Tessellated);
+    const int columns_hit = columnsHit(f);
+    EXPECT_EQ(f.stats.parametric_triangles, 0u);
+    if (width_px > 0.5) {
+      EXPECT_GE(columns_hit, (b.x - a.x + 1) * 95 / 100);
+      EXPECT_EQ(f.stats.parametric_instances_drawn, 1u);
+    } else {
+      EXPECT_EQ(columns_hit, 0);
+      EXPECT_EQ(f.stats.parametric_instances_drawn, 0u);
+    }
+    // Impostors grow thin tubes to half a pixel: a continuous line at both widths, though this
+    // pipe lies exactly between two pixel rows (their centres sit on the grown silhouette).
+    const Frame impostor = render(pkg, camera, ParametricMode::Impostor);
+    EXPECT_GE(columnsHit(impostor), (b.x - a.x + 1) * 95 / 100);
+  }
+}
+
+// A pipe about 6 px across, upright 20 m ahead, turned about its own axis: at tau = 1 its ring
+// has a handful of segments. Seen from any side it covers about the pixels of the true pipe
+// (straddling rings); inscribed rings would make it up to 30 % thinner seen flat-on, and about
+// 10 % on average, which opens the gaps between the pipes of a rack.
+TEST_F(ParametricRendering, CoarsePipeKeepsItsWidthFromEverySide) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 20.0, 0.0});
+  const double metres_per_px = 20.0 / camera.pixelScale(kHeight);
+  const float radius = static_cast<float>(3.0 * metres_per_px);
+  const float height = static_cast<float>(100.0 * metres_per_px);
+  double sum_ratio = 0.0;
+  int views = 0;
+  for (float roll : {0.0f, 9.0f, 18.0f, 27.0f, 36.0f, 45.0f}) {
+    SCOPED_TRACE(roll);
+    const std::vector<Part> parts = {
+        {1, Cylinder{radius, height, false}, placed({0.0, 20.0, -0.5 * height}, {0, 0, roll})}};
+    const std::string name = "width" + std::to_string(int(roll));
+    const Frame coarse = render(buildPackage(name, parts, false), camera,
+                                ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
+    const Frame fine = render(buildPackage(name + "_mesh", parts, true), camera,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_LT(coarse.stats.parametric_triangles, 40u);  // a coarse ring: the case in question
+    const auto covered = [](const Frame& f) {
+      return double(std::count(f.ids.begin(), f.ids.end(), 1u));
+    };
+    ASSERT_GT(covered(fine), 400.0);
+    const double ratio = covered(coarse) / covered(fine);
+    EXPECT_NEAR(ratio, 1.0, 0.12);
+    sum_ratio += ratio;
+    ++views;
+  }
+  EXPECT_NEAR(sum_ratio / views, 1.0, 0.04);
+}
+
+// A coarse pipe is shaded like the true one: where both cover a pixel, the colours agree. Near a
+// silhouette the interpolated normal of a coarse ring leans away from the eye; were it flipped
+// toward the eye, lit pixels there would turn dark.
+TEST_F(ParametricRendering, CoarsePipeHasNoDarkSpecks) {
+  size_t both = 0, dark = 0;
+  for (double eye_z : {4.0, -4.0}) {
+    const Camera camera = lookingAt({0.0, 0.0, eye_z}, {0.0, 20.0, 0.0});
+    const double metres_per_px = 20.4 / camera.pixelScale(kHeight);
+    const float radius = static_cast<float>(5.0 * metres_per_px);
+    const float length = static_cast<float>(150.0 * metres_per_px);
+    for (float roll : {0.0f, 20.0f, 40.0f}) {
+      const std::vector<Part> parts = {
+          {1, Cylinder{radius, length, false}, placed({-0.5 * length, 20.0, 0.0}, {roll, 90, 0})}};
+      const std::string name = "specks" + std::to_string(int(roll));
+      const Frame coarse = render(buildPackage(name, parts, false), camera, ParametricMode::Tessellated,
+                                  OcclusionMode::Off, nullptr, false, 1.0);
+      const Frame fine = render(buildPackage(name + "_mesh", parts, true), camera,
+                                ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+      for (size_t i = 0; i < coarse.ids.size(); ++i) {
+        if (coarse.ids[i] != 1u || fine.ids[i] != 1u) continue;
+        ++both;
+        int coarse_sum = 0, fine_sum = 0;
+        for (int k = 0; k < 3; ++k) {
+          coarse_sum += coarse.rgba[4 * i + k];
+          fine_sum += fine.rgba[4 * i + k];
+        }
+        dark += coarse_sum + 3 * 40 < fine_sum;  // darker by more than 40 of 255 a channel
+      }
+    }
+  }
+  ASSERT_GT(both, 5000u);
+  EXPECT_LE(dark, both / 1000) << dark << " of " << both;
+}
+
+// A pipe tessellated whole at a fixed tolerance (how references draw parametrics) shades like the
+// smooth surface, not facet by facet: a reference and a coarser level of the same pipe then differ
+// by their silhouettes, not by the bands of their facets. The pipe is 40 pixels in radius and its
+// ring 13 segments, each about 19 pixels wide. Shaded facet by facet, 1,621 of the 18,265 pixels
+// both cover missed the fine mesh's colour by more than 12 of 255.
+TEST_F(ParametricRendering, FixedTolerancePipeShadesLikeTheSurface) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 20.0, 0.0});
+  const double metres_per_px = 20.0 / camera.pixelScale(kHeight);
+  const float radius = static_cast<float>(40.0 * metres_per_px);
+  const float length = static_cast<float>(200.0 * metres_per_px);
+  const std::vector<Part> parts = {
+      {1, Cylinder{radius, length, false}, placed({-0.5 * length, 20.0 + radius, 0.0}, {20, 90, 0})}};
+  const double tolerance_m = 0.03 * radius;  // 13 segments a ring
+  ASSERT_EQ(arcSegments(radius, 2.0f * std::numbers::pi_v<float>, float(tolerance_m)), 13u);
+  const Frame coarse = render(buildPackage("bands", parts, false), camera, ParametricMode::Tessellated,
+                              OcclusionMode::Off, nullptr, true, 0.25, tolerance_m);
+  const Frame fine = render(buildPackage("bands_mesh", parts, true), camera, ParametricMode::Impostor,
+                            OcclusionMode::Off, nullptr, true);
+  size_t both = 0, banded = 0;
+  for (size_t i = 0; i < coarse.ids.size(); ++i) {
+    if (coarse.ids[i] != 1u || fine.ids[i] != 1u) continue;
+    ++both;
+    int worst = 0;
+    for (int k = 0; k < 3; ++k)
+      worst = std::max(worst, std::abs(int(coarse.rgba[4 * i + k]) - int(fine.rgba[4 * i + k])));
+    banded += worst > 12;
+  }
+  ASSERT_GT(both, 10000u);
+  EXPECT_LT(double(banded) / double(both), 0.01) << banded << " of " << both;
+}
+
+// An I-beam (an extrusion) close by is drawn from its profile; at a distance where the profile's
+// recesses are below a pixel it is its box (12 triangles), covering the same pixels but for a
+// thin band.
+TEST_F(ParametricRendering, FarExtrusionIsItsBox) {
+  const std::vector<glm::vec2> beam = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f},
+                                       {0.005f, -0.14f},  {0.005f, 0.14f},  {0.075f, 0.14f},
+                                       {0.075f, 0.15f},   {-0.075f, 0.15f}, {-0.075f, 0.14f},
+                                       {-0.005f, 0.14f},  {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+  const fs::path pkg = buildPackage("beam", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, false);
+  const fs::path fine = buildPackage("beam_mesh", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, true);
+  // Seen from the side at about 10 m.
+  Camera far_camera = lookingAt({10.0, -2.0, 3.0}, {0.0, 0.0, 3.0});
+  const double metres_per_px = 10.2 / far_camera.pixelScale(kHeight);
+  ASSERT_GT(0.075, metres_per_px) << "the recess must be visible as a pixel or more";
+  const Frame near_frame = render(pkg, lookingAt({1.5, -0.8, 3.0}, {0.0, 0.0, 3.0}),
+                                  ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
+  EXPECT_GT(near_frame.stats.parametric_triangles, 12u);
+  // 0.075 m (half the flange width, the most the box can stray from the profile) is within
+  // tau = 3 px at the beam's nearest possible point (its bounding sphere, 3.2 m nearer): the box.
+  ASSERT_LT(0.075, 3.0 * metres_per_px * (10.2 - 3.2) / 10.2);
+  const Frame far_frame = render(pkg, far_camera, ParametricMode::Tessellated, OcclusionMode::Off,
+                                 nullptr, false, 3.0);
+  EXPECT_EQ(far_frame.stats.parametric_triangles, 12u);
+  const Frame reference = render(fine, far_camera, ParametricMode::Impostor, OcclusionMode::Off,
+                                 nullptr, true);
+  const Agreement g = compare(far_frame, reference, 1e-2);
+  EXPECT_GT(g.covered, 50u);
+  EXPECT_LT(g.mismatchShare(), 0.35) << g.mismatched << " of " << g.covered;
+}
+
+// Extrusions drawn from their profile: a closed one (an I-beam, plain or mirrored) seen from
+// outside has its back faces culled and looks like the fine mesh; with the eye inside its box, or
+// with a profile that crosses itself, both faces are drawn.
+TEST_F(ParametricRendering, ClosedExtrusionCullsBackFacesFromOutside) {
+  const std::vector<glm::vec2> beam = {{-0.3f, -0.6f}, {0.3f, -0.6f}, {0.3f, -0.52f},
+                                       {0.04f, -0.52f}, {0.04f, 0.52f}, {0.3f, 0.52f},
+                                       {0.3f, 0.6f},   {-0.3f, 0.6f}, {-0.3f, 0.52f},
+                                       {-0.04f, 0.52f}, {-0.04f, -0.52f}, {-0.3f, -0.52f}};
+  Transform mirrored = placed({0, 0, 0}, {-90, 0, 0});
+  mirrored.linear = mirrored.linear * glm::mat3(glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1));
+  ASSERT_LT(glm::determinant(mirrored.linear), 0.0f);
+  const Camera outside = lookingAt({3.0, -2.5, 1.8}, {0.0, 3.0, 0.0});
+  for (const Transform& t : {placed({0, 0, 0}, {-90, 0, 0}), mirrored}) {
+    const Part part{1, Extrusion{beam, 6.0f}, t};
+    const Frame culled = render(buildPackage("closed_beam", {part}, false), outside,
+                                ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+    const Frame mesh = render(buildPackage("closed_beam_mesh", {part}, true), outside,
+                              ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+    EXPECT_GT(culled.stats.parametric_triangles, 12u);  // the profile, not the box
+    EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+    const Agreement g = compare(culled, mesh, 2e-3);
+    EXPECT_GT(g.covered, size_t(kWidth * kHeight / 20));
+    EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
+    EXPECT_GT(g.depthShare(), 0.99);  // the near faces, not the far ones
+  }
+  // Standing in the web's recess, inside the beam's box: both faces.
+  const Part part{1, Extrusion{beam, 6.0f}, placed({0, 0, 0}, {-90, 0, 0})};
+  const Camera recess = lookingAt({0.2, 1.0, 0.0}, {0.2, 5.0, 0.3});
+  const Frame inside = render(buildPackage("closed_beam", {part}, false), recess,
+                              ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+  EXPECT_GT(inside.stats.parametric_two_sided_triangles, 0u);
+  // A profile that crosses itself (an uneven bow tie): its caps do not close it.
+  const std::vector<glm::vec2> bow_tie = {{0.0f, 0.0f}, {0.6f, 0.6f}, {0.6f, 0.0f}, {0.0f, 0.3f}};
+  const Part crossed{1, Extrusion{bow_tie, 6.0f}, placed({0, 0, 0}, {-90, 0, 0})};
+  const Frame crossed_frame = render(buildPackage("crossed_beam", {crossed}, false), outside,
+                                     ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 0.5);
+  EXPECT_GT(crossed_frame.stats.parametric_triangles, 0u);
+  EXPECT_EQ(crossed_frame.stats.parametric_two_sided_triangles,
+            crossed_frame.stats.parametric_triangles);
+}
+
+// hzb, tessellated mode: two spheres in one parametric cluster, one in front of a mesh wall and
+// one behind it. The cluster is visible, so only the instance test can leave the hidden sphere
+// out: it does, the image equals the unculled redraw, and when the camera rises above the wall
+// the hidden sphere shows in the very frame it becomes visible.
+TEST_F(ParametricRendering, HzbCullsHiddenInstancesOfAVisibleCluster) {
+  SceneObject wall;
+  wall.info.id = 1;
+  wall.info.name = "wall";
+  wall.info.color_rgba = 0xff808080u;
+  wall.info.transform.origin = glm::dvec3(0.0, 0.0, 1.0);
+  wall.geometry = test::subdividedBox(glm::vec3(0.1f, 4.0f, 1.0f), 4);
+  const std::vector<Part> balls = {{2, Sphere{0.5f}, placed({-2.0, 0, 1.0})},
+                                   {3, Sphere{0.5f}, placed({3.0, 0, 1.0})}};
+  const fs::path pkg = buildPackage("hidden_ball", balls, false, {wall});
+  const Camera low = lookingAt({-6.0, 0.0, 1.0}, {3.0, 0.0, 1.0});
+  Walkthrough* walk = nullptr;
+  const Frame f = render(pkg, low, ParametricMode::Tessellated, OcclusionMode::Hzb, &walk);
+  EXPECT_EQ(f.stats.parametric_clusters_drawn, 1u);
+  EXPECT_EQ(f.stats.parametric_instances_drawn, 1u);
+  EXPECT_EQ(f.stats.parametric_occluded, 1u);
+  const uint32_t near_id = idAt(f, pixelOf(low, {-2.0, 0.0, 1.0}));
+  ASSERT_GT(near_id, 0u);
+  EXPECT_EQ(walk->package().objects()[near_id - 1].id, 2u);
+  std::vector<uint32_t> unculled;
+  walk->redrawUnculled();
+  walk->renderer().readObjectIds(unculled);
+  EXPECT_EQ(unculled, f.ids);
+
+  // Over the wall: the far sphere's first frame already shows it.
+  const Camera high = lookingAt({-6.0, 0.0, 9.0}, {3.0, 0.0, 1.0});
+  const FrameStats up = walk->renderFrame(high, 1.0);
+  std::vector<uint32_t> ids;
+  walk->renderer().readObjectIds(ids);
+  const glm::ivec2 far_px = pixelOf(high, {3.0, 0.0, 1.3});
+  const uint32_t far_id = ids[size_t(far_px.y) * kWidth + size_t(far_px.x)];
+  ASSERT_GT(far_id, 0u);
+  EXPECT_EQ(walk->package().objects()[far_id - 1].id, 3u);
+  EXPECT_EQ(up.parametric_instances_drawn, 2u);
+}
+
+// The frame loop expands the first pass's instances on a worker thread (prepare) while it submits
+// the meshes: the draw that follows must show exactly what a plain draw shows, and a prepare made
+// for other clusters must be dropped, not drawn.
+TEST_F(ParametricRendering, PreparedOnAnotherThreadDrawsTheSameAsADraw) {
+  const std::vector<Part> parts = {{1, Cylinder{0.3f, 3.0f, true}, placed({-1.5, 0, 0}, {0, 90, 0})},
+                                   {2, Sphere{0.6f}, placed({1.0, 1.0, 0.3})},
+                                   {3, Box{{0.5f, 0.4f, 0.3f}}, placed({0.5, -1.2, 0.0}, {0, 0, 30})}};
+  const fs::path package = buildPackage("prepared", parts, false);
+  PackageView view = PackageView::open(package, PackageView::Verify::Headers);
+  RendererOptions renderer_options;
+  renderer_options.width = kWidth;
+  renderer_options.height = kHeight;
+  GlRenderer renderer(renderer_options);
+  std::vector<uint32_t> colors;
+  for (const pkg::ObjectRecord& o : view.objects()) colors.push_back(o.color_rgba);
+  renderer.setObjectColors(colors);
+  ParametricRenderer parametric(view, renderer);
+  std::vector<uint32_t> clusters;
+  for (uint32_t c = 0; c < view.clusters().size(); ++c)
+    if (view.clusters()[c].kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+      clusters.push_back(c);
+  ASSERT_GE(clusters.size(), 2u);  // one per primitive type
+  const Camera camera = lookingAt(view.origin() + glm::dvec3(0.0, -6.0, 3.0), view.origin());
+  ParametricView pv;
+  pv.eye = camera.position - view.origin();
+  pv.forward = camera.forward();
+  pv.near_m = camera.near_m;
+  pv.pixel_scale = camera.pixelScale(kHeight);
+  const glm::mat4 rotation(camera.viewRotation());
+  const glm::mat4 projection(camera.projection(double(kWidth) / kHeight));
+  auto frame = [&](const std::function<void()>& before_draw, ParametricDrawStats* stats) {
+    renderer.beginFrame(rotation, projection);
+    before_draw();
+    *stats = parametric.draw(clusters, pv, ParametricMode::Tessellated, 1);
+    renderer.endFrame();
+    std::vector<uint32_t> ids;
+    renderer.readObjectIds(ids);
+    return ids;
+  };
+  ParametricDrawStats plain_stats, prepared_stats, dropped_stats;
+  const std::vector<uint32_t> plain = frame([] {}, &plain_stats);
+  const std::vector<uint32_t> prepared = frame(
+      [&] {
+        std::thread worker([&] { parametric.prepare(clusters, pv, ParametricMode::Tessellated); });
+        worker.join();
+      },
+      &prepared_stats);
+  const std::vector<uint32_t> dropped = frame(
+      [&] {
+        parametric.prepare(std::span(clusters).first(1), pv, ParametricMode::Tessellated);
+      },
+      &dropped_stats);
+  std::set<uint32_t> seen(plain.begin(), plain.end());
+  EXPECT_EQ(seen.size(), 4u);  // the three parts and the background
+  EXPECT_EQ(prepared, plain);
+  EXPECT_EQ(dropped, plain);
+  EXPECT_EQ(prepared_stats.instances_drawn, plain_stats.instances_drawn);
+  EXPECT_EQ(prepared_stats.mesh_triangles, plain_stats.mesh_triangles);
+  EXPECT_EQ(dropped_stats.mesh_triangles, plain_stats.mesh_triangles);
+}
+
+}  // namespace
+}  // namespace tw
