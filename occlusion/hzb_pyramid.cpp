@@ -58,7 +58,8 @@ void reduceLevel(std::span<const float> src, glm::ivec2 src_size, std::span<floa
     if (y1 == y0 + 1) {
       const float* row1 = row0 + src_size.x;
       for (; x + 1 < dst_size.x; ++x)
-        out[x] = std::min(std::min(row0[2 * x], row0[2 * x + 1]), std::min(row1[2 * x], row1[2 * x + 1]));
+        out[x] = std::min(std::min(row0[2 * x], row0[2 * x + 1]),
+                          std::min(row1[2 * x], row1[2 * x + 1]));
     }
     // The rest: a third row or column at the odd edge, or a 1-texel axis.
     for (; x < dst_size.x; ++x) {

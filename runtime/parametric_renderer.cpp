@@ -240,7 +240,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     return stats;
   const auto start = Clock::now();
   const auto records = s.view->clusters();
-  s.classify(clusters, mode);
+  if (!use_prepared) s.classify(clusters, mode);  // a prepare() sorted these very clusters already
 
   GlRenderer& r = *s.renderer;
   const glm::mat4& view_projection = r.viewProjection();
