@@ -11,7 +11,7 @@
 // pixel thick, the default), impostor at true size (thin_radius_px 0), the same primitives
 // tessellated at a fixed 1 mm and drawn as triangles (the reference a mesh renderer would give),
 // and tessellated mode as it runs by default on llvmpipe (a resolution per instance at tau 1 px,
-// thin things as one-pixel lines, below 0.4 px left out).
+// thin tubes as ribbons, below 0.4 px left out).
 #include <benchmark/benchmark.h>
 
 #include <GL/gl.h>

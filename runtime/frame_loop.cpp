@@ -152,6 +152,7 @@ void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats
     stats->parametric_instances_drawn += drawn.instances_drawn;
     stats->parametric_triangles += drawn.mesh_triangles;
     stats->parametric_two_sided_triangles += drawn.two_sided_triangles;
+    stats->parametric_thin_instances += drawn.thin_instances;
     stats->parametric_occluded += drawn.instances_occluded;
     stats->parametric_cpu_ms += drawn.cpu_ms;
   }

@@ -38,6 +38,7 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("parametric_instances_drawn", s.parametric_instances_drawn);
   visit("parametric_triangles", s.parametric_triangles);
   visit("parametric_two_sided_triangles", s.parametric_two_sided_triangles);
+  visit("parametric_thin_instances", s.parametric_thin_instances);
   visit("parametric_cpu_ms", s.parametric_cpu_ms);
   visit("parametric_occluded", s.parametric_occluded);
   visit("pages_resident", s.pages_resident);

@@ -29,6 +29,7 @@ struct FrameStats {
   uint64_t parametric_instances_drawn = 0;  // submitted, before per-instance small-feature culling
   uint64_t parametric_triangles = 0;        // of run-time meshes (tessellated mode, extrusions...)
   uint64_t parametric_two_sided_triangles = 0;  // of parametric_triangles: no back-face culling
+  uint64_t parametric_thin_instances = 0;   // of parametric_instances_drawn: ribbons and points
   double parametric_cpu_ms = 0.0;           // CPU time to submit them (and build new meshes)
   // hzb, tessellated mode: instances of drawn clusters not drawn because their own box was
   // hidden (parametric_instance_meshes.h, "Occlusion").

@@ -45,14 +45,14 @@ uint32_t levelIndex(uint32_t segments) {
   return it == kLevels.end() ? uint32_t(kLevels.size() - 1) : uint32_t(it - kLevels.begin());
 }
 
-// The unit meshes. Surfaces are triangles; thin instances degrade to lines along their axis
-// (Axis: n segments of the tube's axis or the torus's centre circle; BoxAxis: the box's axis a)
-// and instances thin in every direction to a point.
+// The unit meshes. Surfaces are triangles; instances thin in every direction degrade to a point.
+// Ribbon: a tube or elbow thinner than a pixel, drawn as its silhouette (a band facing the eye
+// along the axis or centre circle, as wide as the tube seen from there), built here each frame.
 // Profile: an extrusion's or a revolution's surface, drawn from its cluster's mesh
 // (ParametricMeshes::drawInstances), not here.
 // Lathe: a revolution swept here from its own profile (simplified to the tolerance), not from a
-// unit mesh. None: thinner than the smallest line worth drawing (InstanceLodView::min_thin_px).
-enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Axis, BoxAxis, Point, Profile, Lathe, None };
+// unit mesh. None: thinner than the smallest thin form worth drawing (InstanceLodView::min_thin_px).
+enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Ribbon, Point, Profile, Lathe, None };
 
 Shape surfaceOf(uint32_t type) {
   switch (static_cast<pkg::PrimitiveType>(type)) {
@@ -65,8 +65,8 @@ Shape surfaceOf(uint32_t type) {
   }
 }
 
-// The per-frame batches: triangles by back-face culling, lines, points.
-enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kLines, kPoints, kBatchCount };
+// The per-frame batches: triangles by back-face culling, points.
+enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kPoints, kBatchCount };
 
 constexpr uint8_t kValid = 1, kCapped = 2, kMirrored = 4;
 constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills its box: a box
@@ -204,8 +204,8 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   return b;
 }
 
-// How one visible instance is drawn: its unit mesh (shape and level indices, or a box axis), end
-// caps, and the batch (back-face culling, mirroring; lines; points).
+// How one visible instance is drawn: its unit mesh (shape and level indices; a ribbon's segments
+// along a torus's centre circle), end caps, and the batch (back-face culling, mirroring; points).
 struct Form {
   Shape shape = Shape::Tube;
   uint32_t a = 0, b = 0;
@@ -214,8 +214,9 @@ struct Form {
   Batch batch = kTwoSided;
 };
 
-// The form of one visible instance: each arc's chordal error within `tolerance` metres; thinner
-// than `thin` metres across, a line or a point, or nothing when thinner than `min_thin`.
+// The form of one visible instance: each arc's chordal error within `tolerance` metres; a tube
+// or elbow thinner than `thin` metres across a ribbon, a box thin in two directions its box, an
+// instance thin in all three a point; any of these thinner than `min_thin`, nothing.
 // `eye_outside`: the eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's
 // or elbow's inside cannot be seen (tubeInsideHidden, or a member of a sealed run with the eye
 // clear of every sealed run).
@@ -224,15 +225,14 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
   Form f;
   f.capped = (b.flags & kCapped) != 0;
   bool closed = true;
-  float across = 0.0f;  // thin forms: the width the line or point stands for
+  float across = 0.0f;  // thin forms: the width the ribbon, box or point stands for
   // Cross-section rings (tubes, tori, spheres) at half the tolerance: a ring's error shows on
   // both sides of a pipe, so its width is what tau bounds (docs/parametrics.md, "Rings").
   const float ring_tolerance = 0.5f * tolerance;
   switch (surfaceOf(b.type)) {
     case Shape::Tube:
       if (2.0f * b.size[0] < thin) {
-        f.shape = b.size[1] < thin ? Shape::Point : Shape::BoxAxis;
-        f.a = 2;  // the axis
+        f.shape = b.size[1] < thin ? Shape::Point : Shape::Ribbon;
         across = f.shape == Shape::Point ? std::max(2.0f * b.size[0], b.size[1]) : 2.0f * b.size[0];
         break;
       }
@@ -253,7 +253,10 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
     case Shape::Torus: {
       f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), tolerance));
       if (2.0f * b.size[1] < thin) {
-        f.shape = Shape::Axis;
+        // The ribbon is narrower than its chords' sag could be at the tolerance: a quarter of it,
+        // and straddling chords (ribbon()), keep it within an eighth of the true centre circle.
+        f.shape = Shape::Ribbon;
+        f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), 0.25f * tolerance));
         across = 2.0f * b.size[1];
         break;
       }
@@ -262,17 +265,22 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       closed = inside_hidden || b.size[2] >= float(kTwoPi);  // a full torus has no open ends
       break;
     }
-    default: {  // box and profiles: thin in two directions, a line along the third; in all three, a point
+    default: {  // box and profiles: thin in two directions, the box; in all three, a point
       int thin_axes = 0, longest = 0;
       for (int axis = 0; axis < 3; ++axis) {
         thin_axes += 2.0f * b.size[axis] < thin;
         if (b.size[axis] > b.size[longest]) longest = axis;
       }
-      f.shape = thin_axes == 3 ? Shape::Point : thin_axes == 2 ? Shape::BoxAxis : surfaceOf(b.type);
-      if (f.shape == Shape::BoxAxis) {
-        f.a = uint32_t(longest);
+      f.shape = thin_axes == 3 ? Shape::Point : surfaceOf(b.type);
+      if (thin_axes == 2) {
+        // A box a pixel thin is still the cheapest exact silhouette: its 12 triangles sample the
+        // pixels the full-resolution surface would.
         for (int axis = 0; axis < 3; ++axis)
           if (axis != longest) across = std::max(across, 2.0f * b.size[axis]);
+        if (f.shape != Shape::Box) {
+          f.shape = Shape::Box;
+          f.box_frame = true;
+        }
       } else if (f.shape == Shape::Point) {
         across = 2.0f * b.size[longest];
       }
@@ -291,17 +299,13 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       break;
     }
   }
-  if (f.shape == Shape::BoxAxis || f.shape == Shape::Point || f.shape == Shape::Axis) {
-    // A sub-pixel line covers its whole length where the true surface covers a share of the
-    // pixels about equal to its width: below min_thin, leaving it out is the nearer image.
-    if (across < min_thin) f.shape = Shape::None;
-  }
-  if (f.shape == Shape::BoxAxis || f.shape == Shape::Point) f.box_frame = true;
+  if (across > 0.0f && across < min_thin) f.shape = Shape::None;
+  if (f.shape == Shape::Point) f.box_frame = true;
   if (f.shape != Shape::Tube) f.capped = false;
-  if (f.shape == Shape::Axis || f.shape == Shape::BoxAxis)
-    f.batch = kLines;
-  else if (f.shape == Shape::Point)
+  if (f.shape == Shape::Point)
     f.batch = kPoints;
+  else if (f.shape == Shape::Ribbon)
+    f.batch = kTwoSided;  // it faces the eye
   else if (closed && (eye_outside || inside_hidden))  // back faces hidden by the front faces
     f.batch = (b.flags & kMirrored) ? kCullCw : kCullCcw;
   return f;
@@ -468,11 +472,10 @@ struct ParametricInstanceMeshes::Impl {
       case Shape::Sphere: m = builder.sphere(kLevels[a], kLevels[b]); break;
       case Shape::Torus: m = builder.torus(kLevels[a], kLevels[b]); break;
       case Shape::Box: m = builder.box(); break;
-      case Shape::Axis: m = builder.axis(kLevels[a]); break;
-      case Shape::BoxAxis: m = builder.boxAxis(a); break;
       case Shape::Point: m = builder.point(); break;
       case Shape::Profile:
       case Shape::Lathe:
+      case Shape::Ribbon:
       case Shape::None: break;  // never expanded from a unit mesh
     }
     m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
@@ -531,6 +534,65 @@ struct ParametricInstanceMeshes::Impl {
       }
       previous_first = first;
       previous_on_axis = on_axis;
+    }
+  }
+
+  // Appends tube or elbow `i`, thinner than a pixel, as its silhouette: a band along the axis
+  // (the centre circle in `segments` steps over its sweep) facing the eye, as wide as the tube's
+  // cross-section seen from there, shaded with the normal of the tube's line nearest the eye.
+  // Its two triangles cover the pixel centres the full-resolution tube would, where a one-pixel
+  // line covered a whole pixel row along a tube a fifth of a pixel thick.
+  void ribbon(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, uint32_t segments) {
+    const pkg::InstanceRecord& in = view->instances()[i];
+    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+    const glm::vec3 origin = anchor_eye + b.origin;
+    const float* p = in.params;
+    const auto type = static_cast<pkg::PrimitiveType>(in.type);
+    // One cross-section: its centre, the axis direction there and the circle's two radii
+    // (canonical frame).
+    auto section = [&](const glm::vec3& centre, const glm::vec3& along, const glm::vec3& u,
+                       const glm::vec3& w, float radius) {
+      const glm::vec3 at = origin + linear * centre;
+      const glm::vec3 tangent = glm::normalize(linear * along);
+      const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
+      glm::vec3 side = glm::cross(tangent, to_eye);
+      if (glm::length(side) < 1e-6f)  // seen along its axis: a dot, any side will do
+        side = glm::cross(tangent, std::abs(tangent.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+      side = glm::normalize(side);
+      // The circle radius * (cos t * u + sin t * w), mapped, reaches this far along `side`.
+      const float half = radius * std::hypot(glm::dot(linear * u, side), glm::dot(linear * w, side));
+      const glm::vec3 facing = to_eye - glm::dot(to_eye, tangent) * tangent;
+      const float facing_length = glm::length(facing);
+      const uint32_t normal = packNormal(facing_length > 1e-6f ? facing / facing_length : to_eye);
+      vertices.push_back({at - half * side, in.object, normal});
+      vertices.push_back({at + half * side, in.object, normal});
+    };
+    const uint32_t base = static_cast<uint32_t>(vertices.size());
+    uint32_t steps = 1;
+    if (type == pkg::PrimitiveType::TorusSegment) {
+      // Centre circle of radius p[0] in the canonical xy plane, swept p[2] radians in `segments`
+      // chords that straddle the circle, as the rings do.
+      const float sweep = p[2];
+      steps = std::max(segments, 1u);
+      const float centre_radius =
+          p[0] * 2.0f / (1.0f + std::cos(0.5f * std::min(sweep, float(kTwoPi)) / float(steps)));
+      for (uint32_t k = 0; k <= steps; ++k) {
+        const float a = sweep * float(k) / float(steps);
+        const glm::vec3 radial(std::cos(a), std::sin(a), 0.0f);
+        section(centre_radius * radial, {-radial.y, radial.x, 0.0f}, radial, {0.0f, 0.0f, 1.0f}, p[1]);
+      }
+    } else {  // cylinder (radius p[0], height p[1]) or cone (radii p[0], p[1], height p[2])
+      const bool cone = type == pkg::PrimitiveType::Cone;
+      const float height = cone ? p[2] : p[1];
+      section({0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, p[0]);
+      section({0.0f, 0.0f, height}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
+              cone ? p[1] : p[0]);
+    }
+    std::vector<uint32_t>& out = indices[kTwoSided];
+    for (uint32_t k = 0; k < steps; ++k) {
+      const uint32_t a = base + 2 * k;
+      out.insert(out.end(), {a, a + 1, a + 3, a, a + 3, a + 2});
     }
   }
 
@@ -735,7 +797,11 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       profiles.push_back({c, i, distance, cull});
       return;
     }
-    stats.thin_instances += form.batch == kLines || form.batch == kPoints;
+    stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
+    if (form.shape == Shape::Ribbon) {
+      s.ribbon(i, b, anchor_eye, kLevels[form.a]);
+      return;
+    }
     if (form.shape == Shape::Lathe) {
       s.lathe(i, b, anchor_eye, kLevels[form.a],
               0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
@@ -793,7 +859,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
     } else {
       glDisable(GL_CULL_FACE);
     }
-    const GLenum mode = batch == kLines ? GL_LINES : batch == kPoints ? GL_POINTS : GL_TRIANGLES;
+    const GLenum mode = batch == kPoints ? GL_POINTS : GL_TRIANGLES;
     glDrawElements(mode, GLsizei(count), GL_UNSIGNED_INT,
                    reinterpret_cast<const void*>(first[batch] * sizeof(uint32_t)));
     ++stats.draw_calls;

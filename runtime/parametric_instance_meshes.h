@@ -1,12 +1,13 @@
 // Tessellated mode with a level of detail per instance: each visible parametric instance drawn
-// at the resolution its own distance asks for, thin ones as lines or points.
+// at the resolution its own distance asks for, thin ones as their silhouette or points.
 //
 // Why: tessellating whole clusters (parametric_meshes.h) gives every instance of a cluster the
 // resolution its nearest point needs, so a 64-instance pipe run that starts at the eye is drawn at
 // close-up resolution along its whole length, and a far handrail post costs as many triangles as
 // a near one. Here each visible instance picks its own segment counts: the chordal error of its
-// arcs projects to at most tolerance_px (the frame's tau). Thin ones become one-pixel lines or
-// points (InstanceLodView::thin_px), extrusions whose profile detail is below tolerance their box.
+// arcs projects to at most tolerance_px (the frame's tau). Thin tubes and elbows become ribbons,
+// two triangles per segment facing the eye, thin beams their box, things thin every way points
+// (InstanceLodView::thin_px); extrusions whose profile detail is below tolerance their box.
 // Instances outside the frustum's side planes or whose bounding sphere projects below
 // min_feature_px are dropped. Closed surfaces seen from outside the solid (not merely outside
 // its bounding sphere; extrusions too, when their profile is simple), open tubes seen from
@@ -15,7 +16,7 @@
 // How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
 // formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
 // every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex
-// batch, drawn with at most five calls. Instancing was measured first: llvmpipe runs its vertex
+// batch, drawn with at most four calls. Instancing was measured first: llvmpipe runs its vertex
 // pipeline once per instance, about a microsecond each, which for 60,000 small far instances
 // cost more than their triangles (docs/parametrics.md).
 // Extrusions that need their true surface are handed back to the caller for
@@ -55,12 +56,14 @@ struct InstanceLodView {
   double near_m = 0.05;
   double tolerance_px = 1.0;        // chordal error allowed on screen
   double min_feature_px = 1.0;      // instances whose bounding sphere projects below are dropped
-  // Tubes, elbows and spheres thinner than this on screen (at their nearest point) are drawn as
-  // one-pixel lines along their axis or as points, boxes thin in two directions as lines and in
-  // three as points: fewer vertices than the thinnest mesh, and a continuous line where a
-  // sub-pixel mesh breaks into dots. Thinner than min_thin_px they are left out: the true
-  // surface covers less than that share of the pixels along the line, so the line would add
-  // more wrong pixels than it keeps right ones (docs/parametrics.md has the measurement).
+  // Tubes and elbows thinner than this on screen (at their nearest point) are drawn as ribbons:
+  // a band along the axis or centre circle facing the eye, as wide as the tube seen from there
+  // (two triangles a pipe; the coarsest tube mesh has six). It covers the pixel centres the true
+  // surface covers, as the one-pixel lines drawn before did not (docs/parametrics.md, "Thin
+  // things and the reference"). Boxes, extrusions and revolutions thin in two directions are
+  // drawn as their box (a beam's exact silhouette), spheres and anything thin in all three
+  // directions as points. Thinner than min_thin_px they are left out: many, each covering few
+  // pixels, for a small gain (measured there).
   double thin_px = 1.0;
   double min_thin_px = 0.4;
   InstancePass pass = InstancePass::All;
@@ -73,7 +76,7 @@ struct InstanceLodStats {
   uint64_t instances_culled = 0;   // frustum side planes, small features, below min_thin_px
   uint64_t triangles_drawn = 0;    // submitted (back faces included)
   uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
-  uint64_t thin_instances = 0;     // of instances_drawn: as lines or points
+  uint64_t thin_instances = 0;     // of instances_drawn: as ribbons or points
   uint64_t instances_occluded = 0; // second pass: hidden by the pyramid, one by one
   uint32_t draw_calls = 0;
   uint32_t unit_meshes = 0;        // made so far
@@ -91,7 +94,7 @@ class ParametricInstanceMeshes {
   ParametricInstanceMeshes(const ParametricInstanceMeshes&) = delete;
   ParametricInstanceMeshes& operator=(const ParametricInstanceMeshes&) = delete;
 
-  // True for the types handled here: all seven (extrusions and revolutions as lines and points,
+  // True for the types handled here: all seven (extrusions and revolutions as boxes and points,
   // their surfaces through ParametricMeshes).
   static bool handles(uint32_t type);
 

@@ -339,6 +339,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.instances_occluded += lod_stats.instances_occluded;
     stats.mesh_triangles += lod_stats.triangles_drawn;
     stats.two_sided_triangles += lod_stats.two_sided_triangles;
+    stats.thin_instances += lod_stats.thin_instances;
     const ParametricMeshStats profile_stats = s.meshes->drawInstances(
         s.profile_instances, view.eye, view_projection, view.pixel_scale, view.tolerance_px,
         r.objectColorCount(), frame);

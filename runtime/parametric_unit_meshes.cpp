@@ -86,25 +86,6 @@ UnitMesh UnitMeshBuilder::box() {
   return m;
 }
 
-UnitMesh UnitMeshBuilder::axis(uint32_t n) {
-  UnitMesh m = begin();
-  for (uint32_t i = 0; i <= n; ++i) shapes.push_back({float(i) / float(n), 0.0f, float(i) / float(n), 0.0f});
-  for (uint32_t i = 0; i < n; ++i) indices.insert(indices.end(), {i, i + 1});
-  m.side_indices = m.all_indices = count(m);
-  return m;
-}
-
-UnitMesh UnitMeshBuilder::boxAxis(uint32_t k) {
-  UnitMesh m = begin();
-  glm::vec4 end(0.0f);
-  end[int(k % 3)] = 1.0f;
-  shapes.push_back(-end);
-  shapes.push_back(end);
-  indices.insert(indices.end(), {0u, 1u});
-  m.side_indices = m.all_indices = count(m);
-  return m;
-}
-
 UnitMesh UnitMeshBuilder::point() {
   UnitMesh m = begin();
   shapes.push_back(glm::vec4(0.0f));

@@ -50,14 +50,6 @@ class UnitMeshBuilder {
 
   UnitMesh box();
 
-  // n segments from t = 0 to 1, as line pairs: shape (t, 0, t, 0) is the torus's centre-circle
-  // point at sweep fraction t (shapedPoint).
-  UnitMesh axis(uint32_t n);
-
-  // The segment through the centre of the instance's canonical box along its axis `k` (0, 1, 2),
-  // drawn in the box frame: a tube's axis, a beam's centre line.
-  UnitMesh boxAxis(uint32_t k);
-
   // The centre of the instance's canonical box (drawn in the box frame).
   UnitMesh point();
 

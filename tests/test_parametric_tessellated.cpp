@@ -1,6 +1,6 @@
 // Tessellated mode on llvmpipe: each visible parametric instance drawn at the resolution its own
 // distance asks for (parametric_instance_meshes.h), against impostors and fine meshes: coverage,
-// resolution by distance, thin pipes as lines, coarse pipes' width and shading, back faces culled
+// resolution by distance, thin things as ribbons and boxes, coarse pipes' width and shading, back faces culled
 // only where hidden (closed solids from outside, sealed pipe runs, closed extrusions), far
 // extrusions as boxes, instance-by-instance occlusion, and the first pass prepared on another
 // thread.
@@ -217,10 +217,10 @@ TEST_F(ParametricRendering, TessellatedResolutionFollowsEachInstance) {
   EXPECT_EQ(idAt(both, pixelOf(camera, {3.0, 10.0, 1.0})), 2u);
 }
 
-// A pipe thinner than a pixel (0.7 px across, 60 m away) is a continuous one-pixel line in
-// tessellated mode and costs no triangles; one of 0.2 px is left out (the true surface would
-// cover a fifth of the pixels along it). Impostors draw both as lines.
-TEST_F(ParametricRendering, ThinPipeIsAContinuousLineOrNothing) {
+// A pipe thinner than a pixel (0.7 px across, 60 m away) is a ribbon of two triangles in
+// tessellated mode; one of 0.2 px is left out (the true surface would cover a fifth of the pixels
+// along it). Impostors draw both as lines.
+TEST_F(ParametricRendering, ThinPipeIsARibbonOrNothing) {
   const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 60.0, 0.0});
   const double metres_per_px = 60.0 / camera.pixelScale(kHeight);
   const glm::ivec2 a = pixelOf(camera, {-8.0, 60.0, 0.0}), b = pixelOf(camera, {8.0, 60.0, 0.0});
@@ -241,13 +241,12 @@ TEST_F(ParametricRendering, ThinPipeIsAContinuousLineOrNothing) {
         "thin" + std::to_string(int(width_px * 10)),
         {{1, Cylinder{radius, 20.0f, false}, placed({-10, 60, 0}, {0, 90, 0})}}, false);
     const Frame f = render(pkg, camera, ParametricMode::Tessellated);
-    const int columns_hit = columnsHit(f);
-    EXPECT_EQ(f.stats.parametric_triangles, 0u);
     if (width_px > 0.5) {
-      EXPECT_GE(columns_hit, (b.x - a.x + 1) * 95 / 100);
+      EXPECT_EQ(f.stats.parametric_triangles, 2u);
       EXPECT_EQ(f.stats.parametric_instances_drawn, 1u);
     } else {
-      EXPECT_EQ(columns_hit, 0);
+      EXPECT_EQ(f.stats.parametric_triangles, 0u);
+      EXPECT_EQ(columnsHit(f), 0);
       EXPECT_EQ(f.stats.parametric_instances_drawn, 0u);
     }
     // Impostors grow thin tubes to half a pixel: a continuous line at both widths, though this
@@ -255,6 +254,38 @@ TEST_F(ParametricRendering, ThinPipeIsAContinuousLineOrNothing) {
     const Frame impostor = render(pkg, camera, ParametricMode::Impostor);
     EXPECT_GE(columnsHit(impostor), (b.x - a.x + 1) * 95 / 100);
   }
+}
+
+// Things thinner than a pixel but not left out (a pipe, a cone, an elbow, a beam; 0.5 to 0.8 px
+// across, 60 m away, at slants that cross pixel rows) cover the pixels the same shapes finely
+// tessellated cover: ribbons and boxes sample pixel centres as the true surfaces do, where the
+// one-pixel lines these were drawn as before covered every column along them.
+TEST_F(ParametricRendering, ThinThingsCoverThePixelsOfTheirTrueSurface) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 60.0, 0.0});
+  const float px = static_cast<float>(60.0 / camera.pixelScale(kHeight));  // metres per pixel
+  const std::vector<Part> parts = {
+      {1, Cylinder{0.35f * px, 16.0f, true}, placed({-8, 60, 1.0}, {0, 80, 0})},
+      {2, Cylinder{0.25f * px, 14.0f, false}, placed({-7, 60, 4.0}, {0, 96, 0})},
+      {3, Cone{0.4f * px, 0.25f * px, 12.0f, true}, placed({-6, 60, -3.0}, {0, 85, 0})},
+      {4, TorusSegment{10.0f, 0.35f * px, 2.0f}, placed({-4, 60, -14.0}, {90, 0, 0})},
+      {5, Box{glm::vec3(8.0f, 0.3f * px, 0.3f * px)}, placed({0, 60, 7.0}, {0, -7, 0})},
+  };
+  const Frame thin = render(buildPackage("thin_true", parts, false), camera,
+                            ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
+  const Frame fine = render(buildPackage("thin_true_mesh", parts, true), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(thin.stats.parametric_instances_drawn, parts.size());
+  EXPECT_EQ(thin.stats.parametric_thin_instances, 4u);  // the box is a box
+  EXPECT_LT(thin.stats.parametric_triangles, 60u);
+  for (const Part& part : parts) {
+    SCOPED_TRACE(part.id);
+    const auto covered = [&](const Frame& f) {
+      return double(std::count(f.ids.begin(), f.ids.end(), part.id));
+    };
+    ASSERT_GT(covered(fine), 10.0);
+    EXPECT_NEAR(covered(thin) / covered(fine), 1.0, 0.15);
+  }
+  EXPECT_LT(compare(thin, fine, 0.01).mismatchShare(), 0.1);
 }
 
 // A pipe about 6 px across, upright 20 m ahead, turned about its own axis: at tau = 1 its ring
