@@ -626,7 +626,23 @@ struct ParametricInstanceMeshes::Impl {
     }
     const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
     std::vector<uint32_t>& out = indices[f.batch];
-    for (uint32_t k = 0; k < count; ++k) out.push_back(base + builder.indices[mesh.first_index + k]);
+    const uint32_t* unit = builder.indices.data() + mesh.first_index;
+    if (f.batch == kTwoSided || f.batch == kPoints) {
+      for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit[k]);
+      return;
+    }
+    // A closed surface seen from outside: its back faces are left out here, where the eye-relative
+    // positions make the test one dot product, instead of being shaded, set up and then culled
+    // by llvmpipe on the render thread. The plane test is the rasterizer's own (the eye behind
+    // the triangle's plane); edge-on triangles are kept.
+    const float front = f.batch == kCullCw ? -1.0f : 1.0f;
+    for (uint32_t k = 0; k + 2 < count; k += 3) {
+      const glm::vec3& a = vertices[base + unit[k]].position;
+      const glm::vec3& b1 = vertices[base + unit[k + 1]].position;
+      const glm::vec3& c1 = vertices[base + unit[k + 2]].position;
+      if (front * glm::dot(glm::cross(b1 - a, c1 - a), a) > 0.0f) continue;  // eye behind it
+      out.insert(out.end(), {base + unit[k], base + unit[k + 1], base + unit[k + 2]});
+    }
   }
 };
 
