@@ -178,8 +178,10 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
                        name + " (eye inside)");
   }
   s.meshes = std::make_unique<ParametricMeshes>(view, mesh_options);
-  s.instance_meshes = std::make_unique<ParametricInstanceMeshes>(view);
   s.fixed_tolerance = mesh_options.fixed_tolerance_m > 0.0;
+  // A reference draws every instance from its cluster's mesh at the one tolerance: it never
+  // chooses per instance, so it neither prepares the bounds nor searches for sealed runs.
+  if (!s.fixed_tolerance) s.instance_meshes = std::make_unique<ParametricInstanceMeshes>(view);
 
   // The resident table: every instance of a parametric cluster, relative to its cluster's anchor.
   const auto instances = view.instances();
@@ -214,7 +216,7 @@ ParametricMeshes& ParametricRenderer::meshes() { return *impl_->meshes; }
 
 void ParametricRenderer::recordInstanceVisibility(
     const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
-  impl_->instance_meshes->recordVisible(box_hidden);
+  if (impl_->instance_meshes) impl_->instance_meshes->recordVisible(box_hidden);
 }
 
 ParametricDrawStats ParametricRenderer::draw(std::span<const uint32_t> clusters,
@@ -329,7 +331,8 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     glUseProgram(0);
   }
 
-  if (!s.instance_clusters.empty() || (mode == ParametricMode::Tessellated && view.pass == InstancePass::Second)) {
+  if (s.instance_meshes && (!s.instance_clusters.empty() ||
+                            (mode == ParametricMode::Tessellated && view.pass == InstancePass::Second))) {
     InstanceLodStats lod_stats =
         use_prepared ? s.prepared_stats
                      : s.instance_meshes->prepare(s.instance_clusters, s.lodView(view), s.profile_instances);
@@ -368,7 +371,7 @@ void ParametricRenderer::prepare(std::span<const uint32_t> clusters, const Param
                                  ParametricMode mode) {
   Impl& s = *impl_;
   s.prepared = false;
-  if (mode != ParametricMode::Tessellated) return;  // Auto too: resolving it asks GL
+  if (mode != ParametricMode::Tessellated || !s.instance_meshes) return;  // Auto: resolving it asks GL
   const auto start = Clock::now();
   s.classify(clusters, ParametricMode::Tessellated);
   s.prepared_stats = s.instance_meshes->prepare(s.instance_clusters, s.lodView(view), s.profile_instances);
