@@ -23,6 +23,7 @@
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
 #include "parametric_unit_meshes.h"
+#include "profile_simplifier.h"
 #include "sealed_pipe_runs.h"
 #include "tessellate.h"
 
@@ -351,51 +352,6 @@ glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, con
 }
 
 uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
-
-// The profile polyline without the points that lie within `tolerance` of the line between their
-// kept neighbours (Ramer-Douglas-Peucker): first and last always stay; consecutive duplicates go.
-// Keeps its scratch between calls: it runs for every revolution drawn, every frame.
-class ProfileSimplifier {
- public:
-  void simplify(std::span<const glm::vec2> profile, float tolerance, std::vector<glm::vec2>& kept) {
-    kept.clear();
-    const size_t n = profile.size();
-    if (n == 0) return;
-    keep_.assign(n, 0);
-    keep_[0] = keep_[n - 1] = 1;
-    spans_.assign(1, {0, n - 1});
-    while (!spans_.empty()) {
-      const auto [first, last] = spans_.back();
-      spans_.pop_back();
-      if (last <= first + 1) continue;
-      const glm::vec2 a = profile[first], ab = profile[last] - a;
-      const float length2 = glm::dot(ab, ab);
-      size_t farthest = first;
-      float worst = -1.0f;
-      for (size_t k = first + 1; k < last; ++k) {
-        const glm::vec2 ap = profile[k] - a;
-        const float t = length2 > 0.0f ? std::clamp(glm::dot(ap, ab) / length2, 0.0f, 1.0f) : 0.0f;
-        const float distance = glm::length(ap - t * ab);
-        if (distance > worst) {
-          worst = distance;
-          farthest = k;
-        }
-      }
-      if (worst > tolerance) {
-        keep_[farthest] = 1;
-        spans_.push_back({first, farthest});
-        spans_.push_back({farthest, last});
-      }
-    }
-    for (size_t k = 0; k < n; ++k)
-      if (keep_[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
-  }
-
- private:
-  std::vector<uint8_t> keep_;
-  std::vector<std::pair<size_t, size_t>> spans_;
-};
-
 
 }  // namespace
 

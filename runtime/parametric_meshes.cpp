@@ -17,6 +17,7 @@
 
 #include "gl_program.h"
 #include "parametric_shaders.h"
+#include "profile_simplifier.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -142,9 +143,36 @@ glm::dvec3 clusterAnchor(const pkg::ClusterRecord& c) {
   return glm::dvec3(c.center[0], c.center[1], c.center[2]);
 }
 
+namespace {
+
+// Twice the signed area of a closed profile: positive counter-clockwise.
+double signedArea2(std::span<const glm::vec2> profile) {
+  double area2 = 0.0;
+  for (size_t j = 0; j < profile.size(); ++j) {
+    const glm::dvec2 a = profile[j], b = profile[(j + 1) % profile.size()];
+    area2 += a.x * b.y - b.x * a.y;
+  }
+  return area2;
+}
+
+// Replaces the profile of extrusion `e` (placed by `linear`) by one within `tolerance_m` metres
+// of it, when that drops points and keeps the profile simple (if it was) and its winding.
+void simplifyExtrusion(Extrusion& e, const glm::mat3& linear, float tolerance_m,
+                       ProfileSimplifier& simplifier, std::vector<glm::vec2>& kept) {
+  const float scale = std::max(glm::length(linear[0]), glm::length(linear[1]));
+  if (!(scale > 0.0f) || e.profile.size() <= 3) return;
+  simplifier.simplifyClosed(e.profile, tolerance_m / scale, kept);
+  if (kept.size() < 3 || kept.size() >= e.profile.size()) return;
+  if (extrusionEnclosesSolid(kept) != extrusionEnclosesSolid(e.profile)) return;
+  if ((signedArea2(kept) > 0.0) != (signedArea2(e.profile) > 0.0)) return;
+  e.profile.assign(kept.begin(), kept.end());
+}
+
+}  // namespace
+
 void tessellateCluster(const PackageView& view, uint32_t cluster, float tolerance_m,
                        std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices,
-                       std::vector<uint32_t>* instance_offsets) {
+                       std::vector<uint32_t>* instance_offsets, bool simplify_profiles) {
   if (cluster >= view.clusters().size() ||
       view.clusters()[cluster].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
     throw std::out_of_range("tessellateCluster: cluster " + std::to_string(cluster) +
@@ -156,15 +184,20 @@ void tessellateCluster(const PackageView& view, uint32_t cluster, float toleranc
                             " instance range is outside the table");
   const glm::dvec3 anchor = clusterAnchor(c);
   TriangleMesh mesh;
+  ProfileSimplifier simplifier;
+  std::vector<glm::vec2> kept;
   if (instance_offsets) instance_offsets->assign(1, static_cast<uint32_t>(indices.size()));
   for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i) {
     const pkg::InstanceRecord& in = instances[i];
     mesh.positions.clear();
     mesh.normals.clear();
     mesh.indices.clear();
-    tessellatePrimitive(primitiveOf(in, view.profilePoints()), tolerance_m, mesh);
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+    Primitive primitive = primitiveOf(in, view.profilePoints());
+    if (auto* extrusion = std::get_if<Extrusion>(&primitive); extrusion && simplify_profiles)
+      simplifyExtrusion(*extrusion, linear, tolerance_m, simplifier, kept);
+    tessellatePrimitive(primitive, tolerance_m, mesh);
     const glm::vec3 origin(glm::dvec3(in.origin[0], in.origin[1], in.origin[2]) - anchor);
     const glm::mat3 normals = normalMatrix(linear);
     const bool with_normals = mesh.normals.size() == mesh.positions.size();
@@ -232,7 +265,7 @@ struct ParametricMeshes::Impl {
                                                              : bucketToleranceM(bucket);
     CachedMesh mesh;
     tessellateCluster(*view, cluster, static_cast<float>(tolerance), vertices, indices,
-                      &mesh.instance_offsets);
+                      &mesh.instance_offsets, options.fixed_tolerance_m <= 0.0);
     mesh.index_count = static_cast<uint32_t>(indices.size());
     if (indices.empty()) return mesh;
     glCreateBuffers(1, &mesh.vertex_buffer);

@@ -59,10 +59,13 @@ Primitive primitiveOf(const pkg::InstanceRecord& instance, std::span<const glm::
 // `tolerance_m`, placed relative to the cluster's anchor. Instances whose parameters
 // tessellate to nothing (invalid) add nothing. `instance_offsets`, when given, receives the first
 // index of each instance and the end (instance_count + 1 entries). Throws std::out_of_range for a
-// cluster that is not parametric or out of range.
+// cluster that is not parametric or out of range. `simplify_profiles`: extrusions' profiles lose
+// the points within `tolerance_m` of the rest (ProfileSimplifier::simplifyClosed) where the
+// simplified profile stays as simple as it was and keeps its winding; references keep them all.
 void tessellateCluster(const PackageView& view, uint32_t cluster, float tolerance_m,
                        std::vector<ParametricVertex>& vertices, std::vector<uint32_t>& indices,
-                       std::vector<uint32_t>* instance_offsets = nullptr);
+                       std::vector<uint32_t>* instance_offsets = nullptr,
+                       bool simplify_profiles = false);
 
 // Which faces of an instance a draw may skip: none (an open surface, or the eye inside the solid
 // or near it), or the back faces of a closed solid seen from outside, whose front faces wind

@@ -129,7 +129,9 @@ TEST_F(ParametricRendering, ClosedSurfacesSubmitOnlyTheirFrontFaces) {
     const Frame fine = render(buildPackage(std::string("front_mesh_") + v.name, v.parts, true),
                               v.camera, ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
     EXPECT_EQ(frame.stats.parametric_two_sided_triangles, 0u);
-    if (v.triangles > 0) EXPECT_EQ(frame.stats.parametric_triangles, v.triangles);
+    if (v.triangles > 0) {
+      EXPECT_EQ(frame.stats.parametric_triangles, v.triangles);
+    }
     const Agreement g = compare(frame, fine, 2e-3);
     EXPECT_GT(g.covered, 1000u);
     EXPECT_LT(g.mismatchShare(), 0.02) << g.mismatched << " of " << g.covered;
@@ -417,6 +419,55 @@ TEST_F(ParametricRendering, FixedTolerancePipeShadesLikeTheSurface) {
   }
   ASSERT_GT(both, 10000u);
   EXPECT_LT(double(banded) / double(both), 0.01) << banded << " of " << both;
+}
+
+// An extrusion's cluster mesh at a tolerance coarser than its flanges (10 mm) but finer than its
+// recesses (70 mm) loses the flange tips' corners: fewer triangles, none outside the profile's
+// box; a reference (no simplification) and a finer tolerance keep them all. Drawn at 6 m (that
+// tolerance's bucket) it still covers the fine mesh's pixels, its back faces culled.
+TEST_F(ParametricRendering, ExtrusionMeshLosesProfileDetailBelowItsTolerance) {
+  const std::vector<glm::vec2> beam = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f},
+                                       {0.005f, -0.14f},  {0.005f, 0.14f},  {0.075f, 0.14f},
+                                       {0.075f, 0.15f},   {-0.075f, 0.15f}, {-0.075f, 0.14f},
+                                       {-0.005f, 0.14f},  {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+  const std::vector<Part> parts = {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}};
+  const fs::path pkg = buildPackage("beam_simplified", parts, false);
+  const PackageView view = PackageView::open(pkg);
+  uint32_t cluster = ~0u;
+  for (uint32_t c = 0; c < view.clusters().size(); ++c)
+    if (view.clusters()[c].kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric)) cluster = c;
+  ASSERT_NE(cluster, ~0u);
+  auto triangles = [&](float tolerance, bool simplify, glm::vec3* lo = nullptr, glm::vec3* hi = nullptr) {
+    std::vector<ParametricVertex> vertices;
+    std::vector<uint32_t> indices;
+    tessellateCluster(view, cluster, tolerance, vertices, indices, nullptr, simplify);
+    for (const ParametricVertex& v : vertices) {
+      if (lo) *lo = glm::min(*lo, v.position);
+      if (hi) *hi = glm::max(*hi, v.position);
+    }
+    return indices.size() / 3;
+  };
+  const size_t full = triangles(0.001f, false);
+  EXPECT_EQ(triangles(0.001f, true), full);
+  EXPECT_EQ(triangles(0.016f, false), full);
+  glm::vec3 lo(1e30f), hi(-1e30f), full_lo(1e30f), full_hi(-1e30f);
+  const size_t simplified = triangles(0.016f, true, &lo, &hi);
+  triangles(0.001f, false, &full_lo, &full_hi);
+  EXPECT_LT(simplified, full);
+  EXPECT_GT(simplified, 12u);  // not the box: the recesses stay
+  EXPECT_TRUE(glm::all(glm::greaterThanEqual(lo, full_lo - 1e-5f)));
+  EXPECT_TRUE(glm::all(glm::lessThanEqual(hi, full_hi + 1e-5f)));
+
+  const Camera camera = lookingAt({6.0, -1.5, 3.0}, {0.0, 0.0, 3.0});
+  const Frame frame = render(pkg, camera, ParametricMode::Tessellated, OcclusionMode::Off, nullptr,
+                             false, 1.0);
+  const Frame fine = render(buildPackage("beam_simplified_mesh", parts, true), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(frame.stats.parametric_triangles, simplified);  // the profile at 16 mm, not the box
+  EXPECT_EQ(frame.stats.parametric_two_sided_triangles, 0u);
+  const Agreement g = compare(frame, fine, 1e-2);
+  EXPECT_GT(g.covered, 200u);
+  EXPECT_LT(g.mismatchShare(), 0.05) << g.mismatched << " of " << g.covered;
 }
 
 // An I-beam (an extrusion) close by is drawn from its profile; at a distance where the profile's
