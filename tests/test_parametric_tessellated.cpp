@@ -421,15 +421,19 @@ TEST_F(ParametricRendering, FixedTolerancePipeShadesLikeTheSurface) {
   EXPECT_LT(double(banded) / double(both), 0.01) << banded << " of " << both;
 }
 
+// An I-beam profile 0.3 m deep and 0.15 m wide, 10 mm flanges, 10 mm web, counter-clockwise.
+std::vector<glm::vec2> smallIBeam() {
+  return {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f}, {0.005f, -0.14f},
+          {0.005f, 0.14f},   {0.075f, 0.14f},  {0.075f, 0.15f},  {-0.075f, 0.15f},
+          {-0.075f, 0.14f},  {-0.005f, 0.14f}, {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+}
+
 // An extrusion's cluster mesh at a tolerance coarser than its flanges (10 mm) but finer than its
 // recesses (70 mm) loses the flange tips' corners: fewer triangles, none outside the profile's
 // box; a reference (no simplification) and a finer tolerance keep them all. Drawn at 6 m (that
 // tolerance's bucket) it still covers the fine mesh's pixels, its back faces culled.
 TEST_F(ParametricRendering, ExtrusionMeshLosesProfileDetailBelowItsTolerance) {
-  const std::vector<glm::vec2> beam = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f},
-                                       {0.005f, -0.14f},  {0.005f, 0.14f},  {0.075f, 0.14f},
-                                       {0.075f, 0.15f},   {-0.075f, 0.15f}, {-0.075f, 0.14f},
-                                       {-0.005f, 0.14f},  {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+  const std::vector<glm::vec2> beam = smallIBeam();
   const std::vector<Part> parts = {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}};
   const fs::path pkg = buildPackage("beam_simplified", parts, false);
   const PackageView view = PackageView::open(pkg);
@@ -474,10 +478,7 @@ TEST_F(ParametricRendering, ExtrusionMeshLosesProfileDetailBelowItsTolerance) {
 // recesses are below a pixel it is its box (12 triangles), covering the same pixels but for a
 // thin band.
 TEST_F(ParametricRendering, FarExtrusionIsItsBox) {
-  const std::vector<glm::vec2> beam = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f},
-                                       {0.005f, -0.14f},  {0.005f, 0.14f},  {0.075f, 0.14f},
-                                       {0.075f, 0.15f},   {-0.075f, 0.15f}, {-0.075f, 0.14f},
-                                       {-0.005f, 0.14f},  {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+  const std::vector<glm::vec2> beam = smallIBeam();
   const fs::path pkg = buildPackage("beam", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, false);
   const fs::path fine = buildPackage("beam_mesh", {{1, Extrusion{beam, 6.0f}, placed({0, 0, 0})}}, true);
   // Seen from the side at about 10 m.
