@@ -413,23 +413,13 @@ size_t cleanProfile(const std::vector<glm::vec2>& profile, std::vector<glm::dvec
   return kept;
 }
 
-double signedArea2(const std::vector<glm::vec2>& profile) {
-  double area2 = 0.0;
-  const size_t k = profile.size();
-  for (size_t i = 0; i < k; ++i) {
-    const glm::dvec2 a = profile[i], b = profile[(i + 1) % k];
-    area2 += a.x * b.y - b.x * a.y;
-  }
-  return area2;
-}
-
 bool validExtrusion(const Extrusion& e) {
   if (e.profile.size() < 3 || e.profile.size() > kMaxProfilePoints) return false;
   if (!positiveFinite(e.height)) return false;
   for (const glm::vec2& p : e.profile)
     if (!std::isfinite(p.x) || !std::isfinite(p.y)) return false;
   if (cleanProfile(e.profile, nullptr) < 3) return false;
-  const double area2 = signedArea2(e.profile);
+  const double area2 = profileSignedArea2(e.profile);
   return std::isfinite(area2) && area2 != 0.0;
 }
 
@@ -515,7 +505,7 @@ void extrusionBuild(const Extrusion& e, TriangleMesh& out) {
   std::vector<glm::dvec2> pts;
   pts.reserve(e.profile.size());
   cleanProfile(e.profile, &pts);
-  if (signedArea2(e.profile) < 0.0) std::reverse(pts.begin(), pts.end());
+  if (profileSignedArea2(e.profile) < 0.0) std::reverse(pts.begin(), pts.end());
   const size_t k = pts.size();
   std::vector<uint32_t> cap;
   cap.reserve(3 * (k - 2));
@@ -606,6 +596,16 @@ bool segmentsMeet(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c,
 }
 
 }  // namespace
+
+double profileSignedArea2(std::span<const glm::vec2> profile) {
+  double area2 = 0.0;
+  const size_t k = profile.size();
+  for (size_t i = 0; i < k; ++i) {
+    const glm::dvec2 a = profile[i], b = profile[(i + 1) % k];
+    area2 += a.x * b.y - b.x * a.y;
+  }
+  return area2;
+}
 
 bool extrusionEnclosesSolid(std::span<const glm::vec2> profile) {
   if (profile.size() > kMaxSolidCheckPoints) return false;

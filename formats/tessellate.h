@@ -40,6 +40,10 @@ void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out);
 constexpr size_t kMaxSolidCheckPoints = 256;
 bool extrusionEnclosesSolid(std::span<const glm::vec2> profile);
 
+// Twice the signed area of a closed profile (its last point joins its first), in double:
+// positive when it winds counter-clockwise.
+double profileSignedArea2(std::span<const glm::vec2> profile);
+
 // Exactly the number of triangles the functions above would append, computed without building
 // them (cheap enough to call for every object of a 100M-triangle scene).
 uint64_t primitiveTriangleCount(const Primitive& primitive, float tolerance);

@@ -193,11 +193,7 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Extrusion)) {
     // Shoelace area against the box's: equal (to float rounding) for a rectangle.
     const auto profile = profile_points.subspan(in.profile_first, in.profile_count);
-    double area2 = 0.0;
-    for (size_t j = 0; j < profile.size(); ++j) {
-      const glm::dvec2 a = profile[j], c = profile[(j + 1) % profile.size()];
-      area2 += a.x * c.y - c.x * a.y;
-    }
+    const double area2 = profileSignedArea2(profile);
     const double box_area = double(hi.x - lo.x) * double(hi.y - lo.y);
     if (std::abs(0.5 * std::abs(area2) - box_area) <= 1e-5 * box_area) b.flags |= kRectangleProfile;
     if (extrusionEnclosesSolid(profile)) b.flags |= kClosedProfile;
@@ -531,8 +527,7 @@ struct ParametricInstanceMeshes::Impl {
       // chords that straddle the circle, as the rings do.
       const float sweep = p[2];
       steps = std::max(segments, 1u);
-      const float centre_radius =
-          p[0] * 2.0f / (1.0f + std::cos(0.5f * std::min(sweep, float(kTwoPi)) / float(steps)));
+      const float centre_radius = p[0] * 2.0f / (1.0f + std::cos(0.5f * sweep / float(steps)));
       for (uint32_t k = 0; k <= steps; ++k) {
         const float a = sweep * float(k) / float(steps);
         const glm::vec3 radial(std::cos(a), std::sin(a), 0.0f);

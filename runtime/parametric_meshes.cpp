@@ -145,16 +145,6 @@ glm::dvec3 clusterAnchor(const pkg::ClusterRecord& c) {
 
 namespace {
 
-// Twice the signed area of a closed profile: positive counter-clockwise.
-double signedArea2(std::span<const glm::vec2> profile) {
-  double area2 = 0.0;
-  for (size_t j = 0; j < profile.size(); ++j) {
-    const glm::dvec2 a = profile[j], b = profile[(j + 1) % profile.size()];
-    area2 += a.x * b.y - b.x * a.y;
-  }
-  return area2;
-}
-
 // Replaces the profile of extrusion `e` (placed by `linear`) by one within `tolerance_m` metres
 // of it, when that drops points and keeps the profile simple (if it was) and its winding.
 void simplifyExtrusion(Extrusion& e, const glm::mat3& linear, float tolerance_m,
@@ -164,7 +154,7 @@ void simplifyExtrusion(Extrusion& e, const glm::mat3& linear, float tolerance_m,
   simplifier.simplifyClosed(e.profile, tolerance_m / scale, kept);
   if (kept.size() < 3 || kept.size() >= e.profile.size()) return;
   if (extrusionEnclosesSolid(kept) != extrusionEnclosesSolid(e.profile)) return;
-  if ((signedArea2(kept) > 0.0) != (signedArea2(e.profile) > 0.0)) return;
+  if ((profileSignedArea2(kept) > 0.0) != (profileSignedArea2(e.profile) > 0.0)) return;
   e.profile.assign(kept.begin(), kept.end());
 }
 
