@@ -267,4 +267,53 @@ bool HzbPyramid::occluded(const ScreenFootprint& footprint, int max_span_texels)
   return true;
 }
 
+namespace {
+
+bool hiddenOrOffscreen(const HzbPyramid& pyramid, const glm::vec3& lo, const glm::vec3& hi,
+                       const glm::mat4& view_projection, const BoxTest& test, int splits_left);
+
+// Whether both halves of a box not hidden as a whole (footprint `whole`) are hidden or off
+// screen, with `splits_left` halvings allowed (BoxTest::split_px).
+bool halvesHidden(const HzbPyramid& pyramid, const ScreenFootprint& whole, const glm::vec3& lo,
+                  const glm::vec3& hi, const glm::mat4& view_projection, const BoxTest& test,
+                  int splits_left) {
+  const glm::ivec2 size = whole.max_px - whole.min_px + 1;
+  if (splits_left <= 0 || test.split_px <= 0 || std::max(size.x, size.y) < test.split_px)
+    return false;
+  const glm::vec3 extent = hi - lo;
+  const int axis = extent.x >= extent.y && extent.x >= extent.z ? 0 : (extent.y >= extent.z ? 1 : 2);
+  // One middle value for both halves: no gap between them, whatever the rounding.
+  const float middle = lo[axis] + 0.5f * extent[axis];
+  if (!(middle > lo[axis] && middle < hi[axis])) return false;  // too thin to halve
+  glm::vec3 near_hi = hi, far_lo = lo;
+  near_hi[axis] = far_lo[axis] = middle;
+  return hiddenOrOffscreen(pyramid, lo, near_hi, view_projection, test, splits_left - 1) &&
+         hiddenOrOffscreen(pyramid, far_lo, hi, view_projection, test, splits_left - 1);
+}
+
+bool hiddenOrOffscreen(const HzbPyramid& pyramid, const glm::vec3& lo, const glm::vec3& hi,
+                       const glm::mat4& view_projection, const BoxTest& test, int splits_left) {
+  const ScreenFootprint footprint =
+      projectBox(lo, hi, view_projection, pyramid.width(), pyramid.height());
+  if (footprint.visible_for_sure) return false;
+  if (footprint.offscreen || pyramid.occluded(footprint, test.max_span_texels)) return true;
+  return halvesHidden(pyramid, footprint, lo, hi, view_projection, test, splits_left);
+}
+
+}  // namespace
+
+BoxVisibility occludedBox(const HzbPyramid& pyramid, const glm::vec3& box_min,
+                          const glm::vec3& box_max, const glm::mat4& view_projection,
+                          const BoxTest& test) {
+  if (pyramid.levelCount() == 0) return BoxVisibility::Visible;
+  const ScreenFootprint footprint =
+      projectBox(box_min, box_max, view_projection, pyramid.width(), pyramid.height());
+  if (footprint.visible_for_sure) return BoxVisibility::Visible;
+  if (footprint.offscreen) return BoxVisibility::Offscreen;
+  if (pyramid.occluded(footprint, test.max_span_texels)) return BoxVisibility::Occluded;
+  return halvesHidden(pyramid, footprint, box_min, box_max, view_projection, test, test.max_splits)
+             ? BoxVisibility::Occluded
+             : BoxVisibility::Visible;
+}
+
 }  // namespace tw

@@ -34,6 +34,34 @@ struct ScreenFootprint {
 ScreenFootprint projectBox(const glm::vec3& box_min, const glm::vec3& box_max,
                            const glm::mat4& view_projection, int width, int height);
 
+class HzbPyramid;
+
+// How a box is tested against a pyramid (occludedBox).
+struct BoxTest {
+  int max_span_texels = 16;  // HzbPyramid::occluded
+  // A box that is not hidden as a whole and whose footprint spans at least split_px pixels
+  // (either axis) is halved along its longest axis, and is hidden when both halves are, each
+  // tested the same way, at most max_splits halvings deep. A long box whose near end hides
+  // behind one occluder and whose far end behind another, or whose rectangle reaches past an
+  // occluder's edge only where the box itself does not, is then culled. 0: no halving.
+  int split_px = 32;
+  int max_splits = 8;
+};
+
+enum class BoxVisibility {
+  Visible,    // possibly: some part of the box may show
+  Occluded,   // certainly hidden by the pyramid's depth
+  Offscreen,  // entirely beside the viewport or beyond the far plane
+};
+
+// Tests the box [box_min, box_max] (eye-relative, as projectBox) against `pyramid` (which must
+// have been built for the same width x height viewport). Conservative like occluded(): the halves
+// of a split box share their middle plane exactly, so together they are the box, and a half is
+// hidden only when its own footprint is occluded or off screen.
+BoxVisibility occludedBox(const HzbPyramid& pyramid, const glm::vec3& box_min,
+                          const glm::vec3& box_max, const glm::mat4& view_projection,
+                          const BoxTest& test);
+
 class HzbPyramid {
  public:
   HzbPyramid() = default;

@@ -238,11 +238,10 @@ bool OcclusionCuller::hidden(uint32_t cluster, const OcclusionFrame& frame,
 
 bool OcclusionCuller::testBox(const glm::vec3& lo, const glm::vec3& hi, const OcclusionFrame& frame,
                               bool& offscreen) const {
-  const ScreenFootprint footprint =
-      projectBox(lo, hi, frame.view_projection, frame.renderer->width(), frame.renderer->height());
-  offscreen = footprint.offscreen && !footprint.visible_for_sure;
-  if (offscreen) return true;
-  return pyramid_.occluded(footprint, hzb_options_.test_span_texels);
+  const BoxVisibility visibility =
+      occludedBox(pyramid_, lo, hi, frame.view_projection, hzb_options_.box_test);
+  offscreen = visibility == BoxVisibility::Offscreen;
+  return visibility != BoxVisibility::Visible;
 }
 
 bool OcclusionCuller::boxHidden(const glm::vec3& lo, const glm::vec3& hi,

@@ -84,9 +84,10 @@ struct HzbOptions {
                                              // this wide (the CPU build keeps every level)
   bool rebuild_from_final_depth = true;      // step 3 builds a second pyramid (see above)
   HzbBuild build = HzbBuild::Auto;
-  // HzbPyramid::occluded's span: a box is tested at the finest level where it covers at most
-  // this many texels per axis.
-  int test_span_texels = 16;
+  // How boxes are tested (occludedBox): at the finest level where a box covers at most
+  // max_span_texels texels per axis, halved while it spans at least split_px pixels
+  // (docs/occlusion.md, "Halving boxes").
+  BoxTest box_test;
   // How the view cell's occluder set is used (docs/occlusion.md, measured on the decks path of
   // the 10M tessellated plant):
   // - Seed (default): on a frame where nothing of the cut was visible the frame before (the

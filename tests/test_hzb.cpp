@@ -1,7 +1,8 @@
 // The hierarchical-Z pyramid and its box test: the CPU reduction against brute force (odd sizes
 // included), the GPU compute build against the CPU one bit for bit on llvmpipe (uploaded and
 // rendered depth), projectBox on known cameras and against GPU-rasterized boxes, occluded() on a
-// wall, and a randomized check that occluded() never hides a box pixel nearer than the depth.
+// wall, occludedBox halving a long box behind two walls, and a randomized check that neither
+// occluded() nor the halving ever hides a box pixel nearer than the depth.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -334,14 +335,86 @@ TEST_F(WallTest, CoarseLevelsAloneStillCullAndNeverOverCull) {
   EXPECT_FALSE(coarse.occluded(straddling));
 }
 
+// occludedBox: halving a box not hidden as a whole.
+
+class BoxHalving : public ProjectBox {
+ protected:
+  // Rows below `boundary_row` (the lower part of the image) hold a wall at 10 m, the rows above it
+  // one at `upper_m`.
+  std::vector<float> depthImage(double upper_m) const {
+    std::vector<float> depth(size_t(kW) * kH);
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x)
+        depth[size_t(y) * kW + x] = float(depthAt(camera_, y < kBoundaryRow ? 10.0 : upper_m));
+    return depth;
+  }
+  // Whether the box truly hides behind `depth`: every pixel it covers (ray through the pixel
+  // centre) lies farther than the depth there.
+  bool trulyHidden(const std::vector<float>& depth, const glm::vec3& lo, const glm::vec3& hi) const {
+    for (int y = 0; y < kH; ++y)
+      for (int x = 0; x < kW; ++x) {
+        const double box = boxDepthAtPixel(camera_, glm::dmat4(vp_), kW, kH, x, y,
+                                           glm::dvec3(lo), glm::dvec3(hi));
+        if (box >= 0.0 && !(box < depth[size_t(y) * kW + x])) return false;
+      }
+    return true;
+  }
+  static constexpr int kBoundaryRow = 70;
+  // A beam below the eye running away from it, 12 to 40 m: its near end projects low in the
+  // image, behind the 10 m wall; its far end higher up, past the boundary row, where only points
+  // from about 19 m on land.
+  const glm::vec3 lo_{12.0f, -0.5f, -3.0f}, hi_{40.0f, 0.5f, -2.5f};
+};
+
+TEST_F(BoxHalving, LongBoxBehindTwoWallsIsCulledOnlyByItsHalves) {
+  const std::vector<float> depth = depthImage(16.0);
+  ASSERT_TRUE(trulyHidden(depth, lo_, hi_));
+  const HzbPyramid pyramid = HzbPyramid::fromDepth(depth, kW, kH);
+  // As a whole: its nearest point, 12 m, is in front of the upper wall its rectangle reaches.
+  EXPECT_FALSE(pyramid.occluded(projectBox(lo_, hi_, vp_, kW, kH), 16));
+  BoxTest whole;
+  whole.split_px = 0;
+  EXPECT_EQ(occludedBox(pyramid, lo_, hi_, vp_, whole), BoxVisibility::Visible);
+  BoxTest halving;
+  halving.split_px = 4;
+  EXPECT_EQ(occludedBox(pyramid, lo_, hi_, vp_, halving), BoxVisibility::Occluded);
+  // Too few halvings to reach the pieces that are hidden.
+  halving.max_splits = 1;
+  EXPECT_EQ(occludedBox(pyramid, lo_, hi_, vp_, halving), BoxVisibility::Visible);
+}
+
+TEST_F(BoxHalving, BoxPartlyInFrontOfTheFarWallIsNeverCulled) {
+  // The upper wall at 24 m: the beam's stretch from about 19 to 24 m shows above the boundary.
+  const std::vector<float> depth = depthImage(24.0);
+  ASSERT_FALSE(trulyHidden(depth, lo_, hi_));
+  const HzbPyramid pyramid = HzbPyramid::fromDepth(depth, kW, kH);
+  for (int split_px : {0, 1, 4, 32}) {
+    BoxTest test;
+    test.split_px = split_px;
+    test.max_splits = 16;
+    EXPECT_EQ(occludedBox(pyramid, lo_, hi_, vp_, test), BoxVisibility::Visible) << split_px;
+  }
+}
+
+TEST_F(BoxHalving, OffscreenAndEmptyPyramid) {
+  const HzbPyramid pyramid = HzbPyramid::fromDepth(depthImage(16.0), kW, kH);
+  EXPECT_EQ(occludedBox(pyramid, {10.0f, 50.0f, -1.0f}, {11.0f, 52.0f, 1.0f}, vp_, BoxTest{}),
+            BoxVisibility::Offscreen);
+  // Crossing the near plane: visible whatever the depth.
+  EXPECT_EQ(occludedBox(pyramid, {-1.0f, -1.0f, -1.0f}, {1.0f, 1.0f, 1.0f}, vp_, BoxTest{}),
+            BoxVisibility::Visible);
+  EXPECT_EQ(occludedBox(HzbPyramid(), lo_, hi_, vp_, BoxTest{}), BoxVisibility::Visible);
+}
+
 // Random depth images (screen-aligned planes at random distances over a background of nothing)
 // and random boxes, many placed just behind or just in front of a plane: whenever occluded() says
 // true, every pixel the box really covers (ray through the pixel centre) is farther than the
-// depth image there.
+// depth image there. The same for occludedBox's halving, which must also hide whatever the whole
+// test hides.
 TEST(HzbConservative, OccludedBoxesHaveNoPixelNearerThanTheDepth) {
   std::mt19937 rng(12345);
   std::uniform_real_distribution<double> u(0.0, 1.0);
-  int occluded_count = 0, tested = 0;
+  int occluded_count = 0, tested = 0, halved_only = 0;
   for (int image = 0; image < 24; ++image) {
     const int width = 40 + int(u(rng) * 90), height = 30 + int(u(rng) * 60);
     Camera camera;
@@ -392,7 +465,15 @@ TEST(HzbConservative, OccludedBoxesHaveNoPixelNearerThanTheDepth) {
       ++tested;
       // Every span the culler may use: a finer test level must stay just as conservative.
       const int span = 1 << (b % 5);  // 1, 2, 4, 8, 16 texels
-      if (!pyramid.occluded(fp, span)) continue;
+      // And halving, from every box a few pixels wide on.
+      BoxTest halving;
+      halving.max_span_texels = span;
+      halving.split_px = 2 + b % 7;
+      const bool whole = pyramid.occluded(fp, span);
+      const bool halved = occludedBox(pyramid, lo, hi, vp, halving) == BoxVisibility::Occluded;
+      ASSERT_TRUE(halved || !whole) << "halving never keeps what the whole test hides";
+      halved_only += halved && !whole;
+      if (!halved) continue;
       ++occluded_count;
       for (int y = 0; y < height; ++y)
         for (int x = 0; x < width; ++x) {
@@ -400,13 +481,14 @@ TEST(HzbConservative, OccludedBoxesHaveNoPixelNearerThanTheDepth) {
                                                    glm::dvec3(lo), glm::dvec3(hi));
           if (box_depth < 0.0) continue;
           ASSERT_LT(box_depth, depth[size_t(y) * width + x])
-              << "image " << image << " box " << b << " span " << span << " pixel " << x << ","
-              << y;
+              << "image " << image << " box " << b << " span " << span << " split "
+              << halving.split_px << " pixel " << x << "," << y;
         }
     }
   }
   // The check must have had work to do, and not everything is hidden either.
   EXPECT_GT(occluded_count, tested / 10);
+  EXPECT_GT(halved_only, 0);
   EXPECT_LT(occluded_count, tested * 9 / 10);
 }
 

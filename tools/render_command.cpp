@@ -61,7 +61,8 @@ struct RenderArgs {
   bool hzb_final_rebuild = true;
   std::string occluders = "seed";
   std::string hzb_build = "auto";
-  int hzb_span = HzbOptions{}.test_span_texels;
+  int hzb_span = BoxTest{}.max_span_texels;
+  int hzb_split = BoxTest{}.split_px;
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -117,7 +118,8 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.hzb.read_width_px = args.hzb_read_width;
   options.hzb.rebuild_from_final_depth = args.hzb_final_rebuild;
   options.hzb.build = parseHzbBuild(args.hzb_build);
-  options.hzb.test_span_texels = args.hzb_span;
+  options.hzb.box_test.max_span_texels = args.hzb_span;
+  options.hzb.box_test.split_px = args.hzb_split;
   options.hzb.occluders = parseOccluders(args.occluders);
   options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
   options.pager.host_budget_bytes = parseByteSize(args.host_budget, "--host-budget");
@@ -245,6 +247,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
       {"hzb_final_rebuild", args.hzb_final_rebuild},
       {"hzb_build", args.hzb_build},
       {"hzb_span_texels", args.hzb_span},
+      {"hzb_split_px", args.hzb_split},
       {"occluders", args.occluders},
       {"occlusion_culled_total", occlusion_culled_total},
       {"median_occlusion_culled",
@@ -362,6 +365,11 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_option("--hzb-span", args->hzb_span,
                   "Texels per axis a box may cover at its HZB test level (finer: more culled)")
+      ->capture_default_str();
+  cmd->add_option("--hzb-split", args->hzb_split,
+                  "hzb: a box not hidden as a whole is halved while it spans at least this many "
+                  "pixels, and hidden when its halves are (0: never)")
+      ->check(CLI::Range(0, 1 << 16))
       ->capture_default_str();
   cmd->add_option("--occluders", args->occluders,
                   "Use of the view cell's occluder set in hzb mode: seed (pass 1 when nothing was "
