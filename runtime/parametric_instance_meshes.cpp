@@ -18,6 +18,8 @@
 #include <utility>
 #include <vector>
 
+#include <tbb/parallel_for.h>
+
 #include "camera.h"
 #include "gl_program.h"
 #include "parametric_meshes.h"
@@ -404,6 +406,10 @@ struct ParametricInstanceMeshes::Impl {
   // instances left for the second pass, and every instance drawn (cluster, instance).
   std::vector<uint8_t> hidden_last;
   std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
+  // Second pass: the instances left to test against the pyramid, and which of them it hides
+  // (tested in parallel: the rasterizer threads wait for this pass's draws meanwhile).
+  std::vector<std::pair<uint32_t, uint32_t>> to_test;
+  std::vector<uint8_t> test_hidden;
   glm::dvec3 eye{0.0};  // of the frame's passes
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
@@ -601,11 +607,19 @@ void ParametricInstanceMeshes::recordVisible(
     const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
   Impl& s = *impl_;
   const auto records = s.view->clusters();
-  for (const auto& [c, i] : s.drawn) {
-    const InstanceBounds& b = s.bounds[i];
-    const glm::vec3 centre = glm::vec3(clusterAnchor(records[c]) - s.eye) + b.centre;
-    s.hidden_last[i] = box_hidden && box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
-  }
+  // In parallel, like the second pass's tests: each instance is drawn once a frame, so each
+  // writes its own flag.
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, s.drawn.size(), 256),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t k = range.begin(); k != range.end(); ++k) {
+                        const auto [c, i] = s.drawn[k];
+                        const InstanceBounds& b = s.bounds[i];
+                        const glm::vec3 centre =
+                            glm::vec3(clusterAnchor(records[c]) - s.eye) + b.centre;
+                        s.hidden_last[i] =
+                            box_hidden && box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
+                      }
+                    });
   s.drawn.clear();
 }
 
@@ -719,30 +733,15 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     }
   }
   const bool test = view.pass == InstancePass::Second && view.box_hidden;
-  // One instance of cluster `c` (anchor_eye: its anchor relative to the eye).
-  auto consider = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+  // The distance of instance `b` (its centre at `centre`, eye-relative) for its level of detail.
+  auto distanceOf = [&](const InstanceBounds& b, const glm::vec3& centre) {
+    return std::max(double(glm::length(centre)) - b.radius, near_m);
+  };
+  // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye).
+  auto place = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
     const InstanceBounds& b = s.bounds[i];
-    if (!(b.flags & kValid)) return;
-    const glm::vec3 centre = anchor_eye + b.centre;
-    const float centre_distance = glm::length(centre);
-    const double distance = std::max(double(centre_distance) - b.radius, near_m);
+    const double distance = distanceOf(b, anchor_eye + b.centre);
     const double px_per_m = pixel_scale / distance;
-    bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
-    for (const glm::vec4& plane : planes)
-      outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
-    if (outside) {
-      ++stats.instances_culled;
-      return;
-    }
-    if (view.pass == InstancePass::First && s.hidden_last[i]) {
-      s.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
-      return;
-    }
-    if (test && view.box_hidden(centre - b.extent, centre + b.extent)) {
-      s.hidden_last[i] = 1;
-      ++stats.instances_occluded;
-      return;
-    }
     const float metres_per_px = static_cast<float>(1.0 / px_per_m);
     const Form form =
         chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
@@ -776,6 +775,30 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     }
     s.expand(i, b, anchor_eye, form);
   };
+  // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
+  auto consider = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    const InstanceBounds& b = s.bounds[i];
+    if (!(b.flags & kValid)) return;
+    const glm::vec3 centre = anchor_eye + b.centre;
+    const double px_per_m = pixel_scale / distanceOf(b, centre);
+    bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
+    for (const glm::vec4& plane : planes)
+      outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
+    if (outside) {
+      ++stats.instances_culled;
+      return;
+    }
+    if (view.pass == InstancePass::First && s.hidden_last[i]) {
+      s.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
+      return;
+    }
+    if (test) {
+      s.to_test.push_back({c, i});
+      return;
+    }
+    place(c, anchor_eye, i);
+  };
+  s.to_test.clear();
   for (uint32_t c : clusters) {
     if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
       continue;
@@ -789,6 +812,30 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
   if (view.pass == InstancePass::Second) {
     for (const auto& [c, i] : s.deferred) consider(c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
     s.deferred.clear();
+  }
+  if (!s.to_test.empty()) {
+    s.test_hidden.assign(s.to_test.size(), 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, s.to_test.size(), 256),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t k = range.begin(); k != range.end(); ++k) {
+                          const auto [c, i] = s.to_test[k];
+                          const InstanceBounds& b = s.bounds[i];
+                          const glm::vec3 centre =
+                              glm::vec3(clusterAnchor(records[c]) - view.eye) + b.centre;
+                          s.test_hidden[k] = view.box_hidden(centre - b.extent, centre + b.extent);
+                        }
+                      });
+    // Placed in the order considered, as without the test.
+    for (size_t k = 0; k < s.to_test.size(); ++k) {
+      const auto [c, i] = s.to_test[k];
+      if (s.test_hidden[k]) {
+        s.hidden_last[i] = 1;
+        ++stats.instances_occluded;
+      } else {
+        place(c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+      }
+    }
+    s.to_test.clear();
   }
   stats.instances_drawn -= profiles.size();  // counted by whoever draws them
   stats.unit_meshes = static_cast<uint32_t>(s.unit_meshes.size());
