@@ -407,7 +407,7 @@ struct ParametricInstanceMeshes::Impl {
   std::vector<uint8_t> hidden_last;
   std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
   // Second pass: the instances left to test against the pyramid, and which of them it hides
-  // (tested in parallel: the rasterizer threads wait for this pass's draws meanwhile).
+  // (tested in parallel: the rasterizer threads are idle then, waiting for this pass's draws).
   std::vector<std::pair<uint32_t, uint32_t>> to_test;
   std::vector<uint8_t> test_hidden;
   glm::dvec3 eye{0.0};  // of the frame's passes

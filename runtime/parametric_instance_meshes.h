@@ -27,7 +27,9 @@
 // pyramid of the first pass's depth (box_hidden), and draws the survivors; recordVisible then
 // tests every instance drawn against the frame's final depth, which decides the next first pass.
 // A 64-instance cluster visible through a doorway no longer draws its 60 instances behind the
-// wall. Conservative as the cluster test is: only depth that was drawn hides anything.
+// wall. Conservative as the cluster test is: only depth that was drawn hides anything. Both sets
+// of tests run on TBB (box_hidden must be safe to call from several threads at once): the
+// rasterizer threads have nothing else to do while they run.
 // Needs a current GL 4.5 context for the object's whole life.
 #pragma once
 
@@ -67,7 +69,8 @@ struct InstanceLodView {
   double thin_px = 1.0;
   double min_thin_px = 0.4;
   InstancePass pass = InstancePass::All;
-  // Second pass: whether an eye-relative box is hidden by this frame's pyramid.
+  // Second pass: whether an eye-relative box is hidden by this frame's pyramid. Called from
+  // several threads at once.
   std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
 };
 
@@ -119,7 +122,7 @@ class ParametricInstanceMeshes {
   void submit(const glm::mat4& view_projection, uint32_t object_color_count, InstanceLodStats& stats);
 
   // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)
-  // `box_hidden` hides, for the next frame's first pass.
+  // `box_hidden` (called from several threads at once) hides, for the next frame's first pass.
   void recordVisible(const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden);
 
  private:
