@@ -406,10 +406,29 @@ struct ParametricInstanceMeshes::Impl {
   // instances left for the second pass, and every instance drawn (cluster, instance).
   std::vector<uint8_t> hidden_last;
   std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
-  // Second pass: the instances left to test against the pyramid, and which of them it hides
-  // (tested in parallel: the rasterizer threads are idle then, waiting for this pass's draws).
+  // Second pass: the instances left to test against the pyramid; and which of the instances
+  // last tested (testAll) it hides.
   std::vector<std::pair<uint32_t, uint32_t>> to_test;
   std::vector<uint8_t> test_hidden;
+
+  // Tests every (cluster, instance) of `list` with `box_hidden`, eye at `eye_at`, into
+  // test_hidden. On TBB: the rasterizer threads are idle then, waiting for the draws these tests
+  // decide (the second pass) or done with the frame (the visibility record).
+  void testAll(const std::vector<std::pair<uint32_t, uint32_t>>& list, const glm::dvec3& eye_at,
+               const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
+    test_hidden.assign(list.size(), 0);
+    const auto records = view->clusters();
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, list.size(), 256),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t k = range.begin(); k != range.end(); ++k) {
+                          const auto [c, i] = list[k];
+                          const InstanceBounds& b = bounds[i];
+                          const glm::vec3 centre =
+                              glm::vec3(clusterAnchor(records[c]) - eye_at) + b.centre;
+                          test_hidden[k] = box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
+                        }
+                      });
+  }
   glm::dvec3 eye{0.0};  // of the frame's passes
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
@@ -606,20 +625,12 @@ struct ParametricInstanceMeshes::Impl {
 void ParametricInstanceMeshes::recordVisible(
     const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden) {
   Impl& s = *impl_;
-  const auto records = s.view->clusters();
-  // In parallel, like the second pass's tests: each instance is drawn once a frame, so each
-  // writes its own flag.
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, s.drawn.size(), 256),
-                    [&](const tbb::blocked_range<size_t>& range) {
-                      for (size_t k = range.begin(); k != range.end(); ++k) {
-                        const auto [c, i] = s.drawn[k];
-                        const InstanceBounds& b = s.bounds[i];
-                        const glm::vec3 centre =
-                            glm::vec3(clusterAnchor(records[c]) - s.eye) + b.centre;
-                        s.hidden_last[i] =
-                            box_hidden && box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
-                      }
-                    });
+  if (box_hidden) {
+    s.testAll(s.drawn, s.eye, box_hidden);
+    for (size_t k = 0; k < s.drawn.size(); ++k) s.hidden_last[s.drawn[k].second] = s.test_hidden[k];
+  } else {
+    for (const auto& [c, i] : s.drawn) s.hidden_last[i] = 0;
+  }
   s.drawn.clear();
 }
 
@@ -814,17 +825,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     s.deferred.clear();
   }
   if (!s.to_test.empty()) {
-    s.test_hidden.assign(s.to_test.size(), 0);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, s.to_test.size(), 256),
-                      [&](const tbb::blocked_range<size_t>& range) {
-                        for (size_t k = range.begin(); k != range.end(); ++k) {
-                          const auto [c, i] = s.to_test[k];
-                          const InstanceBounds& b = s.bounds[i];
-                          const glm::vec3 centre =
-                              glm::vec3(clusterAnchor(records[c]) - view.eye) + b.centre;
-                          s.test_hidden[k] = view.box_hidden(centre - b.extent, centre + b.extent);
-                        }
-                      });
+    s.testAll(s.to_test, view.eye, view.box_hidden);
     // Placed in the order considered, as without the test.
     for (size_t k = 0; k < s.to_test.size(); ++k) {
       const auto [c, i] = s.to_test[k];
