@@ -38,6 +38,13 @@ void ProfileSimplifier::mark(std::span<const glm::vec2> profile, size_t first, s
   }
 }
 
+// Appends the marked points to `kept` in order, leaving out consecutive duplicates.
+void ProfileSimplifier::collect(std::span<const glm::vec2> profile,
+                                std::vector<glm::vec2>& kept) const {
+  for (size_t k = 0; k < profile.size(); ++k)
+    if (keep_[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
+}
+
 void ProfileSimplifier::simplify(std::span<const glm::vec2> profile, float tolerance,
                                  std::vector<glm::vec2>& kept) {
   kept.clear();
@@ -46,8 +53,7 @@ void ProfileSimplifier::simplify(std::span<const glm::vec2> profile, float toler
   keep_.assign(n, 0);
   keep_[0] = keep_[n - 1] = 1;
   mark(profile, 0, n - 1, tolerance);
-  for (size_t k = 0; k < n; ++k)
-    if (keep_[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
+  collect(profile, kept);
 }
 
 void ProfileSimplifier::simplifyClosed(std::span<const glm::vec2> profile, float tolerance,
@@ -71,8 +77,7 @@ void ProfileSimplifier::simplifyClosed(std::span<const glm::vec2> profile, float
   keep_[0] = keep_[far] = 1;
   mark(profile, 0, far, tolerance);
   mark(profile, far, n, tolerance);  // back round to the first point
-  for (size_t k = 0; k < n; ++k)
-    if (keep_[k] && (kept.empty() || kept.back() != profile[k])) kept.push_back(profile[k]);
+  collect(profile, kept);
   while (kept.size() > 1 && kept.back() == kept.front()) kept.pop_back();
 }
 

@@ -32,6 +32,7 @@ class ProfileSimplifier {
 
  private:
   void mark(std::span<const glm::vec2> profile, size_t first, size_t last, float tolerance);
+  void collect(std::span<const glm::vec2> profile, std::vector<glm::vec2>& kept) const;
 
   std::vector<unsigned char> keep_;
   std::vector<std::pair<size_t, size_t>> spans_;
