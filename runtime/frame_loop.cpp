@@ -76,6 +76,7 @@ Walkthrough::Walkthrough(const std::filesystem::path& package, const Walkthrough
   culler_->setHzbOptions(options_.hzb);
   parametric_ = std::make_unique<ParametricRenderer>(*view_, *renderer_, options_.parametric_meshes);
   options_.parametrics = resolveParametricMode(options_.parametrics);
+  parametric_->prepareMode(options_.parametrics);
   for (uint32_t c = 0; c < view_->clusters().size(); ++c)
     if (view_->clusters()[c].kind == static_cast<uint8_t>(pkg::ClusterKind::Parametric))
       all_parametric_.push_back(c);

@@ -18,6 +18,7 @@
 #include <utility>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "camera.h"
@@ -645,18 +646,25 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
   Impl& s = *impl_;
   s.view = &view;
   const auto instances = view.instances();
+  // Runs are found beside the bounds, the start-up's page loads and the first cut, and taken by
+  // the first draw.
+  s.runs_found = std::async(std::launch::async, [instances] { return findSealedRuns(instances); });
   s.bounds.resize(instances.size());
   s.hidden_last.assign(instances.size(), 0);
-  for (const pkg::ClusterRecord& c : view.clusters()) {
-    if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
-    if (c.instance_first > instances.size() || c.instance_count > instances.size() - c.instance_first)
-      continue;  // the view rejects such packages; never read past the table
-    const glm::dvec3 anchor = clusterAnchor(c);
-    for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
-      s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
-  }
-  // Runs are found beside the start-up's page loads and taken by the first draw.
-  s.runs_found = std::async(std::launch::async, [instances] { return findSealedRuns(instances); });
+  const auto clusters = view.clusters();
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters.size(), 64),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t k = range.begin(); k != range.end(); ++k) {
+                        const pkg::ClusterRecord& c = clusters[k];
+                        if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
+                        if (c.instance_first > instances.size() ||
+                            c.instance_count > instances.size() - c.instance_first)
+                          continue;  // the view rejects such packages; never read past the table
+                        const glm::dvec3 anchor = clusterAnchor(c);
+                        for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
+                          s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
+                      }
+                    });
   while (glGetError() != GL_NO_ERROR) {
   }
   s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricSmoothVertexShader()},

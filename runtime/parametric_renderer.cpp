@@ -94,7 +94,12 @@ struct ParametricRenderer::Impl {
   std::array<GLuint, kImpostorTypes> programs{};         // eye outside the proxy (box: all)
   std::array<GLuint, kImpostorTypes> inside_programs{};  // eye inside (ray-cast types only)
   GLuint instance_buffer = 0, draw_buffer = 0, indirect_buffer = 0, vertex_array = 0;
-  uint64_t instance_bytes = 0;
+  // The impostor programs and the resident instance table are made on the first impostor draw:
+  // the tessellated mode (software rasterizers) never needs them, and at start-up their cost
+  // grows with the model (a table entry per instance).
+  bool impostors_ready = false;
+  void prepareImpostors();
+  void checkGl(const std::string& what) const;  // throws on a pending GL error
   // Per-frame scratch, kept to avoid allocation in steady frames.
   std::array<std::vector<uint32_t>, kImpostorTypes> by_type;
   std::vector<uint32_t> mesh_clusters;      // tessellated per cluster
@@ -161,57 +166,67 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
   s.renderer = &renderer;
   while (glGetError() != GL_NO_ERROR) {
   }
-  for (uint32_t type = 0; type < kImpostorTypes; ++type) {
-    const std::string name = "ParametricRenderer: type " + std::to_string(type);
-    if (type == static_cast<uint32_t>(pkg::PrimitiveType::Box)) {
-      s.programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
-                                         {GL_FRAGMENT_SHADER, gl::boxFragmentShader()}},
-                                        name);
-      continue;
-    }
-    s.programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
-                                       {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, true)}},
-                                      name);
-    s.inside_programs[type] =
-        buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
-                        {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, false)}},
-                       name + " (eye inside)");
-  }
   s.meshes = std::make_unique<ParametricMeshes>(view, mesh_options);
   s.fixed_tolerance = mesh_options.fixed_tolerance_m > 0.0;
   // A reference draws every instance from its cluster's mesh at the one tolerance: it never
   // chooses per instance, so it neither prepares the bounds nor searches for sealed runs.
   if (!s.fixed_tolerance) s.instance_meshes = std::make_unique<ParametricInstanceMeshes>(view);
+  glCreateBuffers(1, &s.draw_buffer);
+  glCreateBuffers(1, &s.indirect_buffer);
+  glCreateVertexArrays(1, &s.vertex_array);  // the proxies come from gl_VertexID: no attributes
+  s.checkGl("set-up");
+}
 
+void ParametricRenderer::prepareMode(ParametricMode mode) {
+  if (resolveParametricMode(mode) == ParametricMode::Impostor) impl_->prepareImpostors();
+}
+
+void ParametricRenderer::Impl::prepareImpostors() {
+  if (impostors_ready) return;
+  impostors_ready = true;
+  for (uint32_t type = 0; type < kImpostorTypes; ++type) {
+    const std::string name = "ParametricRenderer: type " + std::to_string(type);
+    if (type == static_cast<uint32_t>(pkg::PrimitiveType::Box)) {
+      programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                                       {GL_FRAGMENT_SHADER, gl::boxFragmentShader()}},
+                                      name);
+      continue;
+    }
+    programs[type] = buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                                     {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, true)}},
+                                    name);
+    inside_programs[type] =
+        buildGlProgram({{GL_VERTEX_SHADER, gl::impostorVertexShader(type)},
+                        {GL_FRAGMENT_SHADER, gl::impostorFragmentShader(type, false)}},
+                       name + " (eye inside)");
+  }
   // The resident table: every instance of a parametric cluster, relative to its cluster's anchor.
-  const auto instances = view.instances();
+  const auto instances = view->instances();
   std::vector<gpu::GpuInstance> table(std::max<size_t>(instances.size(), 1));
-  for (const pkg::ClusterRecord& c : view.clusters()) {
+  for (const pkg::ClusterRecord& c : view->clusters()) {
     if (c.kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric)) continue;
     if (c.instance_first > instances.size() || c.instance_count > instances.size() - c.instance_first)
       continue;  // the view rejects such packages; never read past the table
     const glm::dvec3 anchor = clusterAnchor(c);
     for (uint32_t i = c.instance_first; i < c.instance_first + c.instance_count; ++i)
-      table[i] = gpuInstance(instances[i], view.profilePoints(), anchor);
+      table[i] = gpuInstance(instances[i], view->profilePoints(), anchor);
   }
-  s.instance_bytes = table.size() * sizeof(gpu::GpuInstance);
-  glCreateBuffers(1, &s.instance_buffer);
-  glNamedBufferStorage(s.instance_buffer, GLsizeiptr(s.instance_bytes), table.data(), 0);
-  glCreateBuffers(1, &s.draw_buffer);
-  glCreateBuffers(1, &s.indirect_buffer);
-  glCreateVertexArrays(1, &s.vertex_array);  // the proxies come from gl_VertexID: no attributes
+  const uint64_t bytes = table.size() * sizeof(gpu::GpuInstance);
+  glCreateBuffers(1, &instance_buffer);
+  glNamedBufferStorage(instance_buffer, GLsizeiptr(bytes), table.data(), 0);
+  checkGl("impostor set-up (" + std::to_string(bytes) + " instance bytes)");
+}
+
+void ParametricRenderer::Impl::checkGl(const std::string& what) const {
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
-    char message[112];
-    std::snprintf(message, sizeof message,
-                  "ParametricRenderer: set-up failed (GL error 0x%04x, %llu instance bytes)", error,
-                  static_cast<unsigned long long>(s.instance_bytes));
-    throw std::runtime_error(message);
+    char code[16];
+    std::snprintf(code, sizeof code, "0x%04x", error);
+    throw std::runtime_error("ParametricRenderer: " + what + " failed (GL error " + code + ")");
   }
 }
 
 ParametricRenderer::~ParametricRenderer() = default;
 
-uint64_t ParametricRenderer::instanceBytes() const { return impl_->instance_bytes; }
 ParametricMeshes& ParametricRenderer::meshes() { return *impl_->meshes; }
 
 void ParametricRenderer::recordInstanceVisibility(
@@ -278,6 +293,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   }
   type_begin[kImpostorTypes] = static_cast<uint32_t>(s.commands.size());
   if (!s.commands.empty()) {
+    s.prepareImpostors();
     glNamedBufferData(s.indirect_buffer, GLsizeiptr(s.commands.size() * sizeof(s.commands[0])),
                       s.commands.data(), GL_STREAM_DRAW);
     glNamedBufferData(s.draw_buffer, GLsizeiptr(s.draws.size() * sizeof(s.draws[0])),

@@ -3,7 +3,7 @@
 // as ray-cast impostors, boxes as rasterized boxes, extrusions and revolutions as run-time
 // meshes (docs/parametrics.md).
 //
-// The package's instance table is resident: it is uploaded once, at construction, into an SSBO of
+// The package's instance table is resident: it is uploaded once, on the first impostor draw, into an SSBO of
 // gpu::GpuInstance (parametric_gpu.h, the layout C++ and GLSL share), each instance's origin made
 // relative to its cluster's anchor (bounding-sphere centre) in double. Per frame, each drawn
 // cluster gets one GpuParametricDraw (anchor - eye, in double, then rounded) and one indirect
@@ -79,13 +79,17 @@ struct ParametricDrawStats {
 
 class ParametricRenderer {
  public:
-  // Uploads the instance table. Throws std::runtime_error when GL set-up fails. `view` and
-  // `renderer` must outlive this object.
+  // Throws std::runtime_error when GL set-up fails. `view` and `renderer` must outlive this
+  // object.
   ParametricRenderer(const PackageView& view, GlRenderer& renderer,
                      const ParametricMeshOptions& mesh_options = {});
   ~ParametricRenderer();
   ParametricRenderer(const ParametricRenderer&) = delete;
   ParametricRenderer& operator=(const ParametricRenderer&) = delete;
+
+  // Makes what `mode` draws with now rather than on its first draw: for Impostor, the programs
+  // and the instance table (start-up, not a frame, pays for them). Throws as the constructor.
+  void prepareMode(ParametricMode mode);
 
   // Draws `clusters` (parametric cluster indices; others are ignored) into the renderer's targets
   // with the camera of its last beginFrame. Off draws nothing; Auto is resolved first. `frame`
@@ -107,8 +111,6 @@ class ParametricRenderer {
   // this frame are hidden, so the next frame's first pass leaves them to its second.
   void recordInstanceVisibility(const std::function<bool(const glm::vec3&, const glm::vec3&)>& box_hidden);
 
-  // Bytes of the resident instance SSBO.
-  uint64_t instanceBytes() const;
   ParametricMeshes& meshes();
 
  private:
