@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "package_writer.h"
+#include "sealed_pipe_runs.h"
 
 namespace tw {
 namespace {
@@ -188,7 +189,8 @@ class Checker {
 
   CheckReport run() {
     // Each stage runs only if the ones before it passed.
-    (void)(checksums() && references() && errors() && bounds() && (!options_.cracks || cracks()));
+    (void)(checksums() && references() && sealedRuns() && errors() && bounds() &&
+           (!options_.cracks || cracks()));
     return std::move(report_);
   }
 
@@ -297,6 +299,26 @@ class Checker {
 
   // (b) Links the view does not check: group -> cluster direction, children, page contents,
   // header totals.
+  // (b2) Sealed-run flags: in a marked package, every instance's roles are what the search finds
+  // (a wrong member flag would cull the inside of a pipe that can be seen).
+  bool sealedRuns() {
+    if (!(view_.header().flags & pkg::kHeaderSealedRunsMarked)) return true;
+    beginStage(progress_, "sealed runs", 0);
+    const auto instances = view_.instances();
+    const std::vector<uint8_t> roles = findSealedRuns(instances);
+    constexpr uint32_t kRoleBits = pkg::kInstanceSealedRunMember | pkg::kInstanceSealedRunCloser;
+    for (uint32_t i = 0; i < instances.size(); ++i) {
+      const uint32_t stored = instances[i].flags & kRoleBits, found = sealedRunInstanceFlags(roles[i]);
+      if (stored != found)
+        return fail("sealed runs",
+                    "instance " + str(i) + " has sealed-run flags " + str(stored) +
+                        " but the search finds " + str(found) + " (member 2, closer 4)",
+                    recordAt(SectionType::Instances, i, sizeof(pkg::InstanceRecord)));
+    }
+    endStage(progress_);
+    return !cancelled();
+  }
+
   bool references() {
     beginStage(progress_, "references", clusters_.size());
     const pkg::PackageHeader& h = view_.header();

@@ -6,6 +6,8 @@
 //   checksums   header, every section, every page, zero padding: any changed byte is caught
 //   references  group <-> cluster links both ways, page cluster counts, encoded ranges not
 //               overlapping, header totals (level count, level-0 triangles, largest cluster)
+//   sealed runs in a package marked kHeaderSealedRunsMarked, every instance's sealed-run flags
+//               are what findSealedRuns finds (sealed_pipe_runs.h)
 //   errors      monotone toward the roots, group records agreeing with their clusters, lod
 //               spheres shared by siblings and growing toward the roots
 //   bounds      every decoded vertex inside its cluster's box and sphere (and produced
@@ -43,7 +45,8 @@ struct CheckOptions {
 
 // The first thing that is wrong.
 struct CheckFailure {
-  std::string check;         // "checksums", "references", "errors", "bounds", "decode" or "cracks"
+  std::string check;  // "checksums", "references", "sealed runs", "errors", "bounds", "decode",
+                      // "cracks"
   std::string what;          // one line naming the record and the numbers
   uint64_t file_offset = 0;  // byte in the file the failure is about (0 when not meaningful)
   uint32_t cluster = pkg::kNone;  // the cluster concerned, or kNone

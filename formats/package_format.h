@@ -17,6 +17,10 @@
 //   1.3 (2026-11) ObjectRecord::flags (was reserved and 0): kObjectClosedSurface marks objects
 //       whose mesh triangles bound a solid, so the runtime may cull their back faces. Earlier
 //       packages stay valid (no object is marked); a 1.2 view rejects a marked object.
+//   1.4 (2026-11) sealed pipe runs found by the preprocessor (sealed_pipe_runs.h): instance flags
+//       kInstanceSealedRunMember and kInstanceSealedRunCloser, and header flag
+//       kHeaderSealedRunsMarked saying the search ran (the runtime no longer runs it at start-up;
+//       without the mark it still does). Earlier packages stay valid; a 1.3 view rejects them.
 #pragma once
 
 #include <bit>
@@ -31,7 +35,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 3;
+inline constexpr uint32_t kMinorVersion = 4;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -86,7 +90,7 @@ struct PackageHeader {
   uint32_t header_bytes;         // sizeof(PackageHeader) == 256
   uint32_t section_entry_bytes;  // sizeof(SectionEntry) == 48
   uint32_t section_count;        // >= kSectionCount; entries past it are bounds-checked, ignored
-  uint32_t flags;                // 0; a view rejects bits it does not know
+  uint32_t flags;                // kHeaderSealedRunsMarked; a view rejects bits it does not know
   uint64_t file_bytes;           // size of the whole file: a truncated file fails at once
   uint64_t input_hash;           // XXH3-64 of the inputs and options, from the preprocessor
   // Struct sizes, so a mismatched build fails loudly rather than misreading records.
@@ -114,6 +118,12 @@ struct PackageHeader {
 static_assert(sizeof(PackageHeader) == 256);
 static_assert(offsetof(PackageHeader, origin) == 80 && offsetof(PackageHeader, level_count) == 136);
 static_assert(offsetof(PackageHeader, header_checksum) == 248);
+
+// PackageHeader::flags. Sealed runs marked: every instance's kInstanceSealedRun* bits are the
+// search's result (sealed_pipe_runs.h), none set meaning "not in a sealed run"; without this bit
+// the instances carry none and a reader that wants the roles searches itself.
+inline constexpr uint32_t kHeaderSealedRunsMarked = 1u << 0;
+inline constexpr uint32_t kKnownHeaderFlags = kHeaderSealedRunsMarked;
 
 // One entry of the section table.
 struct SectionEntry {
@@ -225,6 +235,12 @@ enum class PrimitiveType : uint32_t {
 };
 inline constexpr uint32_t kPrimitiveTypeCount = 7;
 inline constexpr uint32_t kInstanceCapped = 1u << 0;  // Cylinder and Cone
+// Roles in a sealed pipe run (sealed_pipe_runs.h; only with kHeaderSealedRunsMarked): an open
+// tube, cone or elbow of the run, and a capped cylinder that closes one of its ends.
+inline constexpr uint32_t kInstanceSealedRunMember = 1u << 1;
+inline constexpr uint32_t kInstanceSealedRunCloser = 1u << 2;
+inline constexpr uint32_t kKnownInstanceFlags =
+    kInstanceCapped | kInstanceSealedRunMember | kInstanceSealedRunCloser;
 
 // One parametric primitive, placed by an affine map from its canonical frame (scene.h) into the
 // package frame. params by type (unused = 0), as in the .tws format:
@@ -237,7 +253,7 @@ struct InstanceRecord {
   float linear[9];  // column-major 3x3
   float params[6];
   uint32_t type;           // PrimitiveType
-  uint32_t flags;          // kInstanceCapped
+  uint32_t flags;          // kInstanceCapped, kInstanceSealedRunMember, kInstanceSealedRunCloser
   uint32_t object;         // ObjectRecord index
   uint32_t profile_first;  // first point in the Profiles section
   uint32_t profile_count;  // 0 except Extrusion and Revolution; <= kMaxProfilePoints

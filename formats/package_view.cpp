@@ -176,7 +176,7 @@ void PackageView::validate(Verify verify) {
   if (h.file_bytes != size_)
     fail(at(&h.file_bytes), "header says the file has " + str(h.file_bytes) + " bytes but it has " +
                                 str(size_) + " (truncated or extended)");
-  if (h.flags != 0) fail(at(&h.flags), "unknown header flags");
+  if ((h.flags & ~kKnownHeaderFlags) != 0) fail(at(&h.flags), "unknown header flags");
   if (h.section_count < kSectionCount || h.section_count > 4096)
     fail(at(&h.section_count), "section count " + str(h.section_count) + " is out of range");
   const uint64_t table_end =
@@ -304,7 +304,9 @@ void PackageView::validate(Verify verify) {
   for (const InstanceRecord& in : instances_) {
     if (in.type >= kPrimitiveTypeCount)
       fail(offsetOf(&in.type), "unknown primitive type " + str(in.type));
-    if (in.flags & ~kInstanceCapped) fail(offsetOf(&in.flags), "unknown instance flags");
+    if (in.flags & ~kKnownInstanceFlags) fail(offsetOf(&in.flags), "unknown instance flags");
+    if ((in.flags & ~kInstanceCapped) && !(h.flags & kHeaderSealedRunsMarked))
+      fail(offsetOf(&in.flags), "instance has sealed-run flags but the header does not mark them");
     if (in.reserved != 0) fail(offsetOf(&in.reserved), "instance reserved field is not zero");
     if (in.object >= objects_.size())
       fail(offsetOf(&in.object), "instance object " + str(in.object) + " is out of range");

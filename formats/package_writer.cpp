@@ -467,8 +467,13 @@ void instanceBounds(const InstanceRecord& in, std::span<const glm::vec2> profile
   }
 }
 
-uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform& transform,
-                                     uint32_t object) {
+namespace {
+
+// The record of `primitive` placed by `transform` relative to `origin`; its profile points, if
+// any, are appended to `profiles` (profile_first counts from the vector's start).
+InstanceRecord makeInstanceRecord(const Primitive& primitive, const Transform& transform,
+                                  uint32_t object, const glm::dvec3& origin,
+                                  std::vector<glm::vec2>& profiles) {
   if (std::string problem = tws::primitiveProblem(primitive); !problem.empty())
     throw std::invalid_argument("package: " + problem);
   InstanceRecord r{};
@@ -477,8 +482,27 @@ uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform
   const float* m = &transform.linear[0][0];
   std::copy(m, m + 9, r.linear);
   r.object = object;
+  std::visit(InstanceFiller{r, profiles}, primitive);
+  return r;
+}
+
+}  // namespace
+
+pkg::InstanceRecord placedInstanceRecord(const Primitive& primitive, const Transform& transform,
+                                         uint32_t object, const glm::dvec3& origin) {
+  std::vector<glm::vec2> profiles;
+  InstanceRecord r = makeInstanceRecord(primitive, transform, object, origin, profiles);
+  r.profile_first = r.profile_count = 0;
+  return r;
+}
+
+uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform& transform,
+                                     uint32_t object, uint32_t role_flags) {
+  if (role_flags & ~(kInstanceSealedRunMember | kInstanceSealedRunCloser))
+    throw std::invalid_argument("package: instance role flags has unknown bits");
   const uint64_t profile_base = profilePointCount() - profile_points.size();
-  std::visit(InstanceFiller{r, profile_points}, primitive);
+  InstanceRecord r = makeInstanceRecord(primitive, transform, object, origin, profile_points);
+  r.flags |= role_flags;
   r.profile_first = static_cast<uint32_t>(profile_base + r.profile_first);
   if (r.profile_count == 0) r.profile_first = 0;
   const uint32_t index = instanceCount();
@@ -590,6 +614,7 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   std::memcpy(h.magic, kMagic, sizeof(kMagic));
   h.version = kVersion;
   h.minor_version = kMinorVersion;
+  h.flags = storage.sealed_runs_marked ? kHeaderSealedRunsMarked : 0;
   h.header_bytes = sizeof(PackageHeader);
   h.section_entry_bytes = sizeof(SectionEntry);
   h.section_count = kSectionCount;

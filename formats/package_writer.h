@@ -62,6 +62,9 @@ struct PackageStorage {
   double position_step_m = pkg::kDefaultPositionStepM;
   uint32_t target_page_bytes = pkg::kDefaultTargetPageBytes;
   uint64_t input_hash = 0;  // XXH3-64 of inputs and options, caller's
+  // The instances carry the sealed-run search's roles (addInstance's role flags): the header gets
+  // kHeaderSealedRunsMarked. Left false, no instance may have them (writePackage refuses).
+  bool sealed_runs_marked = false;
 
   std::vector<pkg::ClusterRecord> clusters;
   std::vector<pkg::GroupRecord> groups;
@@ -131,8 +134,11 @@ struct PackageStorage {
 
   // Appends `primitive`, placed by `transform` (its origin is world metres; stored relative to
   // this package's origin), as an instance of object index `object`, with its profile points;
-  // returns the instance index. Throws std::invalid_argument for parameters the format forbids.
-  uint32_t addInstance(const Primitive& primitive, const Transform& transform, uint32_t object);
+  // returns the instance index. `role_flags`: kInstanceSealedRunMember / Closer (see
+  // sealed_runs_marked). Throws std::invalid_argument for parameters the format forbids and
+  // for other role bits.
+  uint32_t addInstance(const Primitive& primitive, const Transform& transform, uint32_t object,
+                       uint32_t role_flags = 0);
   // Appends a parametric cluster over instances [first_instance, first_instance + count), which
   // must share one primitive type, with bounds from their parameters; returns the cluster index.
   uint32_t addParametricCluster(uint32_t first_instance, uint32_t count, const ClusterLod& lod);
@@ -152,6 +158,13 @@ struct PackageWriteStats {
 // Writes `storage` to `path` atomically (temporary file, then rename). Throws
 // std::invalid_argument when the storage is inconsistent (the check is PackageView's, with its
 // reason), std::runtime_error on I/O failure; the temporary file is removed either way.
+// The record addInstance would append for `primitive` placed by `transform` as object `object`
+// in a package whose origin is `origin`, without its profile points (profile_first and
+// profile_count 0): what whole-model passes over the instances (the sealed-run search) read.
+// Throws std::invalid_argument as addInstance.
+pkg::InstanceRecord placedInstanceRecord(const Primitive& primitive, const Transform& transform,
+                                         uint32_t object, const glm::dvec3& origin);
+
 PackageWriteStats writePackage(const PackageStorage& storage, const std::filesystem::path& path,
                                const PackageWriteOptions& options = {});
 

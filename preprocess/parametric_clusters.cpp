@@ -93,8 +93,11 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
 
 std::vector<uint32_t> addParametricClusters(std::span<const ParametricItem> items,
                                             const ParametricClustering& clustering,
-                                            PackageStorage& storage) {
+                                            PackageStorage& storage,
+                                            std::span<const uint8_t> role_flags) {
   const size_t count = clustering.clusterCount();
+  if (!role_flags.empty() && role_flags.size() != items.size())
+    throw std::invalid_argument("addParametricClusters: role flags do not match the items");
   if (clustering.order.size() != items.size() ||
       (count == 0 ? !clustering.offsets.empty() : clustering.offsets.size() != count + 1))
     throw std::invalid_argument("addParametricClusters: clustering does not match the items");
@@ -109,8 +112,10 @@ std::vector<uint32_t> addParametricClusters(std::span<const ParametricItem> item
       throw std::invalid_argument("addParametricClusters: clustering has a bad cluster range");
     const uint32_t first = storage.instanceCount();
     for (uint32_t i = begin; i < end; ++i) {
-      const ParametricItem& item = items[clustering.order[i]];
-      storage.addInstance(item.primitive, item.transform, item.object);
+      const uint32_t index = clustering.order[i];
+      const ParametricItem& item = items[index];
+      storage.addInstance(item.primitive, item.transform, item.object,
+                          role_flags.empty() ? 0u : role_flags[index]);
     }
     // Level-0 root: error 0, parent_error +inf, lod spheres = its bounds (radius 0 selects them).
     ClusterLod lod;

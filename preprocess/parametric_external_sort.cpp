@@ -497,13 +497,19 @@ constexpr uint64_t kReaderOverheadBytes = sizeof(RunReader) + sizeof(RunFile) + 
 
 // Adds instances in clustering order and closes each cluster when its precomputed size is
 // reached: per type, ceil(n / max) runs of sizes n * r / runs apart, as clusterPrimitives cuts.
+// The role flags options.instance_role_flags gives the item of input index `index` (none when
+// it is empty; its size was checked against the item count).
+uint32_t roleFlags(const ParametricSortOptions& options, uint32_t index) {
+  return options.instance_role_flags.empty() ? 0u : options.instance_role_flags[index];
+}
+
 class ClusterCutter {
  public:
   ClusterCutter(const std::array<uint64_t, kTypeCount>& counts, uint32_t max_per_cluster,
                 PackageStorage& storage)
       : counts_(counts), max_per_cluster_(max_per_cluster), storage_(storage) {}
 
-  void add(uint32_t type, const ParametricItem& item) {
+  void add(uint32_t type, const ParametricItem& item, uint32_t role_flags) {
     if (int64_t(type) != type_) {
       if (int64_t(type) < type_ || (type_ >= 0 && pos_ != counts_[type_]) || type >= kTypeCount ||
           counts_[type] == 0)
@@ -517,7 +523,8 @@ class ClusterCutter {
     }
     if (pos_ >= n_)
       throw std::logic_error("parametric sort: more items of a type than counted");
-    const uint32_t instance = storage_.addInstance(item.primitive, item.transform, item.object);
+    const uint32_t instance =
+        storage_.addInstance(item.primitive, item.transform, item.object, role_flags);
     if (pos_ == begin_) first_ = instance;
     else if (uint64_t(instance) != first_ + (pos_ - begin_))
       throw std::logic_error("parametric sort: storage did not append instances contiguously");
@@ -631,6 +638,10 @@ ParametricSortStats addParametricClustersOutOfCore(const ParametricStream& strea
   // Pass 1: bounds of the centres, counts, sizes. Bad parameters throw before anything is added.
   const PassOne one = scanItems(stream, storage.origin);
   stats.items = one.items;
+  if (!options.instance_role_flags.empty() && options.instance_role_flags.size() != one.items)
+    throw std::invalid_argument("addParametricClustersOutOfCore: " +
+                                std::to_string(options.instance_role_flags.size()) +
+                                " role flags for " + std::to_string(one.items) + " items");
   const glm::vec3 lo = one.lo, hi = one.hi;
   // One scale for all axes, as clusterPrimitives.
   const glm::vec3 extent(std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z, 1e-30f}));
@@ -723,7 +734,7 @@ ParametricSortStats addParametricClustersOutOfCore(const ParametricStream& strea
         std::memcpy(decoded.profile->data(), record + fixedBytes(key.type),
                     decoded.profile_count * sizeof(glm::vec2));
       }
-      cutter.add(key.type, item);
+      cutter.add(key.type, item, roleFlags(options, key.index));
     }
     cutter.finish();
     stats.clusters = cutter.clusters();
@@ -773,7 +784,7 @@ ParametricSortStats addParametricClustersOutOfCore(const ParametricStream& strea
       // damaged record that the storage or the cutter refuses is reported as what it is.
       mergeReaders(readers, [&](const RunReader& r) {
         try {
-          cutter.add(r.key().type, r.item());
+          cutter.add(r.key().type, r.item(), roleFlags(options, r.key().index));
         } catch (const std::logic_error& e) {  // std::invalid_argument included
           r.fail(std::string("refused (damaged run?): ") + e.what());
         }

@@ -38,6 +38,9 @@ struct ParametricSortOptions {
   // item, and a few hundred bytes per run.
   uint64_t memory_budget_bytes = 64ull << 20;
   uint32_t max_per_cluster = 256;           // as clusterPrimitives
+  // By input item index: role flags for PackageStorage::addInstance (sealed runs,
+  // sealed_run_marking.h), or empty for none. Another size throws std::invalid_argument.
+  std::span<const uint8_t> instance_role_flags;
 };
 
 struct ParametricSortStats {
@@ -53,7 +56,7 @@ struct ParametricSortStats {
 
 // Appends the instances and parametric clusters exactly as
 //   addParametricClusters(items, clusterPrimitives(items, storage.origin, max_per_cluster),
-//                         storage)
+//                         storage, instance_role_flags)
 // would for the concatenation `items` of everything `stream` gives. Throws std::invalid_argument
 // as those do (bad parameters, max_per_cluster 0; nothing is added then), and for a budget under
 // 1 MiB or an empty work_dir; std::runtime_error on I/O failure (naming the file), FormatError

@@ -21,6 +21,7 @@
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "parametric_external_sort.h"
+#include "sealed_run_marking.h"
 #include "quantization_snap.h"
 #include "scene_bricking.h"
 #include "visibility_build.h"
@@ -420,6 +421,12 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
           sink(items);
         });
       };
+  // Sealed pipe runs, searched once here rather than at every start of the runtime.
+  const SealedRunMarking sealed = markSealedRuns(parametrics, storage.origin);
+  sort_options.instance_role_flags = sealed.role_flags;
+  storage.sealed_runs_marked = true;
+  report.sealed_run_members = sealed.stats.sealed_members;
+  report.sealed_run_closers = sealed.stats.closers;
   const ParametricSortStats sorted = addParametricClustersOutOfCore(parametrics, sort_options, storage);
   report.parametric_clusters = sorted.clusters;
   report.parametric_sort_runs = sorted.runs;

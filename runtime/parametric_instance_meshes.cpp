@@ -646,9 +646,18 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
   Impl& s = *impl_;
   s.view = &view;
   const auto instances = view.instances();
-  // Runs are found beside the bounds, the start-up's page loads and the first cut, and taken by
-  // the first draw.
-  s.runs_found = std::async(std::launch::async, [instances] { return findSealedRuns(instances); });
+  if (view.header().flags & pkg::kHeaderSealedRunsMarked) {
+    // The preprocessor searched: the roles are the instances' flags.
+    std::vector<uint8_t> roles(instances.size());
+    for (size_t i = 0; i < instances.size(); ++i) roles[i] = sealedRunRole(instances[i].flags);
+    std::promise<std::vector<uint8_t>> marked;
+    marked.set_value(std::move(roles));
+    s.runs_found = marked.get_future();
+  } else {
+    // Runs are found beside the bounds, the start-up's page loads and the first cut, and taken
+    // by the first draw.
+    s.runs_found = std::async(std::launch::async, [instances] { return findSealedRuns(instances); });
+  }
   s.bounds.resize(instances.size());
   s.hidden_last.assign(instances.size(), 0);
   const auto clusters = view.clusters();

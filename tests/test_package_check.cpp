@@ -313,6 +313,28 @@ TEST(PackageCheck, InstanceOutsideItsClusterFailsBounds) {
   EXPECT_NE(r.failure->what.find("instance 0"), std::string::npos) << r.failure->what;
 }
 
+// A package marked as holding the sealed-run search's roles passes while they are the search's
+// (the lone capped cylinder is in no run); a member flag the search does not find fails, naming
+// the instance; and an unmarked package may not carry such flags at all.
+TEST(PackageCheck, SealedRunFlagsMustBeTheSearchResult) {
+  PackageStorage s = makeDag();
+  s.sealed_runs_marked = true;
+  CheckReport marked = check(s);
+  EXPECT_TRUE(marked.ok()) << describe(marked);
+  EXPECT_TRUE(writeAndOpen(s).header().flags & pkg::kHeaderSealedRunsMarked);
+
+  s.instances[0].flags |= pkg::kInstanceSealedRunMember;
+  CheckReport r = check(s);
+  ASSERT_TRUE(r.failure);
+  EXPECT_EQ(r.failure->check, "sealed runs");
+  EXPECT_NE(r.failure->what.find("instance 0 has sealed-run flags 2 but the search finds 0"),
+            std::string::npos)
+      << r.failure->what;
+
+  s.sealed_runs_marked = false;
+  EXPECT_THROW(writeAndOpen(s, "unmarked.twk"), std::invalid_argument);
+}
+
 TEST(PackageCheck, ObjectBoxMustHoldItsLevel0Triangles) {
   PackageStorage s = makeDag();
   s.objects[0].aabb_max[0] = 1.5f;  // the plate reaches x = 2

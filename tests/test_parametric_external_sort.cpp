@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -91,11 +92,12 @@ tw::ParametricStream streamOf(const std::vector<ParametricItem>& items, size_t b
   };
 }
 
-PackageStorage reference(const std::vector<ParametricItem>& items, uint32_t max_per_cluster) {
+PackageStorage reference(const std::vector<ParametricItem>& items, uint32_t max_per_cluster,
+                         std::span<const uint8_t> role_flags = {}) {
   PackageStorage storage;
   storage.origin = kOrigin;
   tw::addParametricClusters(items, tw::clusterPrimitives(items, kOrigin, max_per_cluster),
-                            storage);
+                            storage, role_flags);
   return storage;
 }
 
@@ -127,13 +129,15 @@ struct Outcome {
 };
 
 Outcome sortOutOfCore(const std::vector<ParametricItem>& items, uint64_t budget,
-                      uint32_t max_per_cluster, const std::filesystem::path& work_dir) {
+                      uint32_t max_per_cluster, const std::filesystem::path& work_dir,
+                      std::span<const uint8_t> role_flags = {}) {
   Outcome out;
   out.storage.origin = kOrigin;
   tw::ParametricSortOptions options;
   options.work_dir = work_dir;
   options.memory_budget_bytes = budget;
   options.max_per_cluster = max_per_cluster;
+  options.instance_role_flags = role_flags;
   int calls = 0;
   out.stats = tw::addParametricClustersOutOfCore(streamOf(items, 97, &calls), options, out.storage);
   EXPECT_EQ(calls, 2);
@@ -193,6 +197,43 @@ TEST(ParametricExternalSort, ProfilesForceManyRunsAndSeveralMerges) {
     EXPECT_EQ(got.stats.clusters, got.storage.clusters.size());
     EXPECT_EQ(filesIn(work), 0u);
   }
+}
+
+// Role flags (sealed runs) are given by input index and must reach each item's own record, in
+// memory and through run files alike; a list of the wrong length is refused.
+TEST(ParametricExternalSort, RoleFlagsFollowTheirItems) {
+  const auto items = makeItems(20000, 5);
+  std::vector<uint8_t> flags(items.size());
+  std::mt19937 rng(9);
+  const uint8_t choices[] = {0, tw::pkg::kInstanceSealedRunMember, tw::pkg::kInstanceSealedRunCloser,
+                             tw::pkg::kInstanceSealedRunMember | tw::pkg::kInstanceSealedRunCloser};
+  for (uint8_t& f : flags) f = choices[rng() % 4];
+  const PackageStorage expected = reference(items, 64, flags);
+  // Against the items' own flags: records keep each item's object, so count by object.
+  std::map<uint32_t, std::pair<int, int>> by_object;  // object -> (members given, members stored)
+  for (size_t i = 0; i < items.size(); ++i)
+    by_object[items[i].object].first += (flags[i] & tw::pkg::kInstanceSealedRunMember) != 0;
+  for (const tw::pkg::InstanceRecord& in : expected.instances)
+    by_object[in.object].second += (in.flags & tw::pkg::kInstanceSealedRunMember) != 0;
+  for (const auto& [object, counts] : by_object) EXPECT_EQ(counts.first, counts.second) << object;
+  const auto work = tw::test::scratchDir() / "work";
+  for (uint64_t budget : {64 * kMiB, kMiB}) {
+    SCOPED_TRACE("budget " + std::to_string(budget));
+    const Outcome got = sortOutOfCore(items, budget, 64, work, flags);
+    expectSameRecords(expected, got.storage);
+    if (budget == kMiB) {
+      EXPECT_GE(got.stats.runs, 2u);
+    }
+  }
+  const std::vector<uint8_t> short_list(items.size() - 1, 0);
+  PackageStorage storage;
+  storage.origin = kOrigin;
+  tw::ParametricSortOptions options;
+  options.work_dir = work;
+  options.instance_role_flags = short_list;
+  EXPECT_THROW(tw::addParametricClustersOutOfCore(streamOf(items, 97, nullptr), options, storage),
+               std::invalid_argument);
+  EXPECT_THROW(reference(items, 64, short_list), std::invalid_argument);
 }
 
 TEST(ParametricExternalSort, EqualKeysKeepInputOrderAcrossRuns) {

@@ -15,6 +15,8 @@
 
 #include "gl_renderer.h"
 #include "package_view.h"
+#include "package_writer.h"
+#include "parametric_clusters.h"
 #include "parametric_render_support.h"
 #include "parametric_renderer.h"
 
@@ -209,6 +211,18 @@ std::vector<Part> pipeRun(bool far_flange) {
 TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
   const Camera outside = lookingAt({-1.5, -1.2, 1.2}, {2.0, 1.0, 0.0});
   const fs::path sealed = buildPackage("sealed_run", pipeRun(true), false);
+  // The preprocessor found the run: two spools and the elbow are members, the flanges close it.
+  auto roles = [](const fs::path& package) {
+    const PackageView view = PackageView::open(package, PackageView::Verify::Headers);
+    EXPECT_TRUE(view.header().flags & pkg::kHeaderSealedRunsMarked);
+    std::pair<int, int> members_closers{0, 0};
+    for (const pkg::InstanceRecord& in : view.instances()) {
+      members_closers.first += (in.flags & pkg::kInstanceSealedRunMember) != 0;
+      members_closers.second += (in.flags & pkg::kInstanceSealedRunCloser) != 0;
+    }
+    return members_closers;
+  };
+  EXPECT_EQ(roles(sealed), std::make_pair(3, 2));
   const Frame culled = render(sealed, outside, ParametricMode::Tessellated);
   const Frame mesh = render(buildPackage("sealed_run_mesh", pipeRun(true), true), outside,
                             ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
@@ -219,8 +233,9 @@ TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
   EXPECT_GT(g.covered, size_t(kWidth * kHeight / 20));
   EXPECT_LT(g.mismatchShare(), 0.01) << g.mismatched << " of " << g.covered;
 
-  const Frame open = render(buildPackage("open_run", pipeRun(false), false), outside,
-                            ParametricMode::Tessellated);
+  const fs::path open_run = buildPackage("open_run", pipeRun(false), false);
+  EXPECT_EQ(roles(open_run), std::make_pair(0, 0));
+  const Frame open = render(open_run, outside, ParametricMode::Tessellated);
   EXPECT_GT(open.stats.parametric_two_sided_triangles, 100u);
 
   // Inside the second spool, 1 m from the far flange, looking at it.
@@ -230,6 +245,39 @@ TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
   size_t background = 0;
   for (uint32_t id : in_run.ids) background += id == 0u;
   EXPECT_EQ(background, 0u);
+}
+
+// A package written without the sealed-run mark (formats before 1.4, or any writer that skips the
+// search) is searched by the runtime at start-up: the same run seen from the same place is culled
+// just as the preprocessed one.
+TEST_F(ParametricRendering, UnmarkedPackageIsSearchedAtStartUp) {
+  const std::vector<Part> parts = pipeRun(true);
+  PackageStorage storage;
+  storage.origin = glm::dvec3(0.0);
+  storage.addLayer({"parts", 0xff909090u});
+  std::vector<ParametricItem> items;
+  for (const Part& part : parts) {
+    ObjectInfo info;
+    info.id = part.id;
+    info.name = "part " + std::to_string(part.id);
+    info.color_rgba = part.color;
+    const uint32_t object = storage.addObject(info, glm::vec3(-10.0f), glm::vec3(10.0f));
+    items.push_back({object, part.primitive, part.transform});
+  }
+  addParametricClusters(items, clusterPrimitives(items, storage.origin), storage);
+  const fs::path unmarked = test::processScratchDir("parametric_renderer") / "unmarked_run.twk";
+  writePackage(storage, unmarked);
+  ASSERT_FALSE(PackageView::open(unmarked, PackageView::Verify::Headers).header().flags &
+               pkg::kHeaderSealedRunsMarked);
+
+  const Camera outside = lookingAt({-1.5, -1.2, 1.2}, {2.0, 1.0, 0.0});
+  const Frame culled = render(unmarked, outside, ParametricMode::Tessellated);
+  EXPECT_EQ(culled.stats.parametric_instances_drawn, 5u);
+  EXPECT_GT(culled.stats.parametric_triangles, 100u);
+  EXPECT_EQ(culled.stats.parametric_two_sided_triangles, 0u);
+  const Frame marked =
+      render(buildPackage("sealed_run", parts, false), outside, ParametricMode::Tessellated);
+  EXPECT_EQ(culled.ids, marked.ids);
 }
 
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is

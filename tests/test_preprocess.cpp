@@ -16,6 +16,7 @@
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "preprocess_driver.h"
+#include "sealed_run_marking.h"
 #include "test_support.h"
 #include "tws_writer.h"
 
@@ -198,8 +199,13 @@ TEST(Preprocess, StreamedPackageEqualsTheInMemoryAssembly) {
   forEachParametricBatch(*scene, 4096, [&](std::span<const ParametricRecord> batch) {
     for (const ParametricRecord& r : batch) items.push_back({r.object, r.primitive, r.transform});
   });
-  addParametricClusters(
-      items, clusterPrimitives(items, storage.origin, options.parametric_cluster_size), storage);
+  const SealedRunMarking sealed = markSealedRuns(
+      [&](const std::function<void(std::span<const ParametricItem>)>& sink) { sink(items); },
+      storage.origin);
+  storage.sealed_runs_marked = true;
+  addParametricClusters(items,
+                        clusterPrimitives(items, storage.origin, options.parametric_cluster_size),
+                        storage, sealed.role_flags);
   const fs::path in_memory = dir / "in_memory.twk";
   writePackage(storage, in_memory);
   EXPECT_GT(storage.pages.size(), 1u);

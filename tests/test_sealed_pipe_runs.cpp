@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <algorithm>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -147,6 +149,38 @@ TEST(SealedPipeRuns, BranchEndingInsideAnotherPartJoinsItsRun) {
   roles = findSealedRuns(poking);
   EXPECT_EQ(roles[3], 0u);
   EXPECT_EQ(roles[1], kSealedRunMember);  // the header alone stays sealed
+}
+
+// The roles do not depend on the order of the instances: the preprocessor searches them in input
+// order and `terawalk verify` in package order. A branch whose lower end lies inside both the
+// header's solid and a flange (two holders) is the case that once did: it joined whichever was
+// found first. Here the header's far end is open, so the branch is open exactly when it joins.
+TEST(SealedPipeRuns, RolesDoNotDependOnInstanceOrder) {
+  const glm::vec3 x(1, 0, 0), z(0, 0, 1);
+  const float header_r = 0.2f, branch_r = 0.05f;
+  std::vector<pkg::InstanceRecord> parts = {
+      flange({0, 0, 0}, x, header_r), tube({0, 0, 0}, x, 3.0f, header_r),  // far end open
+      tube({1.5f, 0, -0.1f}, z, 2.0f, branch_r), flange({1.5f, 0, 1.9f}, z, branch_r),
+      // A wide capped disc around the branch's lower end, inside the header.
+      tube({1.5f, 0, -0.12f}, z, 0.04f, 0.1f, true)};
+  for (pkg::InstanceRecord part : lRun().parts) {  // a sealed run 10 m away
+    part.origin[1] += 10.0f;
+    parts.push_back(part);
+  }
+  const std::vector<uint8_t> roles = findSealedRuns(parts);
+  EXPECT_EQ(roles[2], 0u);  // joined the open header's run
+  EXPECT_EQ(roles[6], kSealedRunMember);  // the L run stays sealed
+  std::vector<uint32_t> order(parts.size());
+  for (uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 50; ++trial) {
+    std::shuffle(order.begin(), order.end(), rng);
+    std::vector<pkg::InstanceRecord> shuffled;
+    for (uint32_t i : order) shuffled.push_back(parts[i]);
+    const std::vector<uint8_t> got = findSealedRuns(shuffled);
+    for (uint32_t k = 0; k < order.size(); ++k)
+      EXPECT_EQ(got[k], roles[order[k]]) << "instance " << order[k] << ", trial " << trial;
+  }
 }
 
 TEST(SealedPipeRuns, PipeEndingInsideABoxIsClosed) {

@@ -211,7 +211,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
   for (uint32_t d = 0; d < discs.size(); ++d) disc_cells.add(cellOf(discs[d].centre, cell), d);
   disc_cells.sort();
   UnionFind runs(parts.size());
-  std::vector<uint8_t> disc_sealed(discs.size(), 0);
+  std::vector<uint8_t> joined(discs.size(), 0);  // met by a partner disc
   for (uint32_t d = 0; d < discs.size(); ++d) {
     const Disc& a = discs[d];
     disc_cells.visit(cellOf(a.centre - tolerance, cell), cellOf(a.centre + tolerance, cell),
@@ -221,19 +221,23 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
                            std::abs(a.radius - b.radius) > tolerance ||
                            glm::dot(a.normal, b.normal) > -kParallelCos)
                          return;
-                       disc_sealed[d] = 1;
+                       joined[d] = 1;
                        runs.unite(a.part, b.part);
                      });
   }
 
   // Holders hold the discs left open. Small ones look for them under the cells of a 0.5 m grid
   // their box covers; the discs still open then look for large ones (decks, long members) under
-  // their cell of an 8 m grid.
+  // their cell of an 8 m grid. A disc takes every holder that holds it, not the first one found:
+  // the result must not depend on the order of the instances (the preprocessor searches them in
+  // input order, `terawalk verify` in package order), and joining every run whose solid holds the
+  // end only makes the sealing harder to reach.
+  std::vector<uint8_t> held(discs.size(), 0);
   std::vector<std::pair<uint32_t, uint32_t>> closing;  // (part, holder) of each closed disc
   auto hold = [&](uint32_t d, uint32_t k) {
     const Holder& h = holders[k];
-    if (disc_sealed[d] || discs[d].part == h.part || !discInside(discs[d], h, tolerance)) return;
-    disc_sealed[d] = 1;
+    if (joined[d] || discs[d].part == h.part || !discInside(discs[d], h, tolerance)) return;
+    held[d] = 1;
     if (h.part == kNoPart)
       closing.emplace_back(discs[d].part, k);
     else
@@ -242,7 +246,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
   const double small_cell = 0.5, large_cell = 8.0;
   CellIndex open_cells;
   for (uint32_t d = 0; d < discs.size(); ++d)
-    if (!disc_sealed[d]) open_cells.add(cellOf(discs[d].centre, small_cell), d);
+    if (!joined[d]) open_cells.add(cellOf(discs[d].centre, small_cell), d);
   open_cells.sort();
   CellIndex large_holders;
   for (uint32_t k = 0; k < holders.size() && !open_cells.empty(); ++k) {
@@ -264,7 +268,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
   }
   large_holders.sort();
   for (uint32_t d = 0; d < discs.size() && !large_holders.empty(); ++d) {
-    if (disc_sealed[d]) continue;
+    if (joined[d] || held[d]) continue;
     const glm::i64vec3 c = cellOf(discs[d].centre, large_cell);
     large_holders.visit(c, c, [&](uint32_t k) { hold(d, k); });
   }
@@ -272,7 +276,7 @@ std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instanc
   // A run is sealed when every disc of every part is.
   std::vector<uint8_t> run_open(parts.size(), 0);
   for (uint32_t d = 0; d < discs.size(); ++d)
-    if (!disc_sealed[d]) run_open[runs.find(discs[d].part)] = 1;
+    if (!joined[d] && !held[d]) run_open[runs.find(discs[d].part)] = 1;
   SealedRunStats counts;
   counts.open_parts = parts.size();
   for (uint32_t part = 0; part < parts.size(); ++part) {

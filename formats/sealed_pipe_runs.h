@@ -19,6 +19,8 @@
 // (union-find); a run is sealed when all its discs are.
 // Positions are the package frame's (InstanceRecord::origin), where one run's coordinates agree
 // to float rounding.
+// Who runs it: the preprocessor, once, storing the roles as instance flags
+// (preprocess/sealed_run_marking.h); the runtime only for packages without them.
 #pragma once
 
 #include <cstdint>
@@ -48,5 +50,16 @@ struct SealedRunStats {
 // One role byte per instance (0: neither).
 std::vector<uint8_t> findSealedRuns(std::span<const pkg::InstanceRecord> instances,
                                     SealedRunStats* stats = nullptr);
+
+// A role byte as instance flags (pkg::kInstanceSealedRunMember, kInstanceSealedRunCloser), the
+// way packages marked kHeaderSealedRunsMarked store it, and back.
+inline uint32_t sealedRunInstanceFlags(uint8_t role) {
+  return ((role & kSealedRunMember) ? pkg::kInstanceSealedRunMember : 0u) |
+         ((role & kSealedRunCloser) ? pkg::kInstanceSealedRunCloser : 0u);
+}
+inline uint8_t sealedRunRole(uint32_t instance_flags) {
+  return uint8_t(((instance_flags & pkg::kInstanceSealedRunMember) ? kSealedRunMember : 0) |
+                 ((instance_flags & pkg::kInstanceSealedRunCloser) ? kSealedRunCloser : 0));
+}
 
 }  // namespace tw
