@@ -15,8 +15,10 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <future>
 #include <limits>
 #include <utility>
+#include <vector>
 
 #include "section_codec.h"
 
@@ -252,14 +254,22 @@ void PackageView::validate(Verify verify) {
       fail(e.offset, (i < kSectionCount ? std::string(kSectionNames[i]) : "section " + str(i)) +
                          " section checksum mismatch");
   }
-  // Compressed tables, once their frames passed the checksum.
+  // Compressed tables, once their frames passed the checksum: each on a thread of its own (the
+  // instance and object tables of a large model are tens of MB each, and this is start-up), the
+  // first problem in table order reported.
   decompressed_.assign(kSectionCount, {});
-  for (uint32_t i = 0; i < kSectionCount; ++i) {
-    const SectionEntry& e = sections_[i];
-    if (e.stored_bytes == 0) continue;
-    const std::string problem = decompressSection(storedOf(i), e.bytes, decompressed_[i]);
-    if (!problem.empty()) fail(e.offset, std::string(kSectionNames[i]) + " section " + problem);
-  }
+  std::vector<std::future<std::string>> problems(kSectionCount);
+  for (uint32_t i = 0; i < kSectionCount; ++i)
+    if (sections_[i].stored_bytes != 0)
+      problems[i] = std::async(std::launch::async, [this, i, frame = storedOf(i)] {
+        return decompressSection(frame, sections_[i].bytes, decompressed_[i]);
+      });
+  std::vector<std::string> results(kSectionCount);
+  for (uint32_t i = 0; i < kSectionCount; ++i)
+    if (problems[i].valid()) results[i] = problems[i].get();  // all joined before any throw
+  for (uint32_t i = 0; i < kSectionCount; ++i)
+    if (!results[i].empty())
+      fail(sections_[i].offset, std::string(kSectionNames[i]) + " section " + results[i]);
   auto bytesOf = [&](SectionType type) {
     const uint32_t i = static_cast<uint32_t>(type);
     if (sections_[i].stored_bytes != 0) return std::span<const uint8_t>(decompressed_[i]);
