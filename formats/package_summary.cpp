@@ -77,7 +77,12 @@ PackageSummary summarizePackage(const PackageView& view) {
   }
 
   s.instances = instances.size();
-  for (const pkg::InstanceRecord& in : instances) ++s.instances_by_type[in.type];
+  s.sealed_runs_marked = (view.header().flags & pkg::kHeaderSealedRunsMarked) != 0;
+  for (const pkg::InstanceRecord& in : instances) {
+    ++s.instances_by_type[in.type];
+    s.sealed_run_members += (in.flags & pkg::kInstanceSealedRunMember) != 0;
+    s.sealed_run_closers += (in.flags & pkg::kInstanceSealedRunCloser) != 0;
+  }
   s.profile_points = view.profilePoints().size();
 
   s.objects = view.objects().size();

@@ -94,9 +94,9 @@ struct ParametricRenderer::Impl {
   std::array<GLuint, kImpostorTypes> programs{};         // eye outside the proxy (box: all)
   std::array<GLuint, kImpostorTypes> inside_programs{};  // eye inside (ray-cast types only)
   GLuint instance_buffer = 0, draw_buffer = 0, indirect_buffer = 0, vertex_array = 0;
-  // The impostor programs and the resident instance table are made on the first impostor draw:
-  // the tessellated mode (software rasterizers) never needs them, and at start-up their cost
-  // grows with the model (a table entry per instance).
+  // The impostor programs and the resident instance table are made by prepareMode(Impostor) or
+  // on the first impostor draw: the tessellated mode (software rasterizers) never needs them, and
+  // their cost grows with the model (a table entry per instance).
   bool impostors_ready = false;
   void prepareImpostors();
   void checkGl(const std::string& what) const;  // throws on a pending GL error
@@ -183,7 +183,6 @@ void ParametricRenderer::prepareMode(ParametricMode mode) {
 
 void ParametricRenderer::Impl::prepareImpostors() {
   if (impostors_ready) return;
-  impostors_ready = true;
   for (uint32_t type = 0; type < kImpostorTypes; ++type) {
     const std::string name = "ParametricRenderer: type " + std::to_string(type);
     if (type == static_cast<uint32_t>(pkg::PrimitiveType::Box)) {
@@ -215,6 +214,7 @@ void ParametricRenderer::Impl::prepareImpostors() {
   glCreateBuffers(1, &instance_buffer);
   glNamedBufferStorage(instance_buffer, GLsizeiptr(bytes), table.data(), 0);
   checkGl("impostor set-up (" + std::to_string(bytes) + " instance bytes)");
+  impostors_ready = true;
 }
 
 void ParametricRenderer::Impl::checkGl(const std::string& what) const {

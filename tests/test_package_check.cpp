@@ -485,6 +485,7 @@ TEST(PackageSummary, CountsPerLevel) {
   EXPECT_EQ(sum.layers[1].name, "piping");
   EXPECT_EQ(sum.layers[1].objects, 1u);
   EXPECT_EQ(sum.instances_by_type[0], 1u);  // cylinder
+  EXPECT_FALSE(sum.sealed_runs_marked);
   EXPECT_EQ(sum.pages, 1u);
   EXPECT_EQ(sum.pages_compressed, 0u);
   EXPECT_EQ(sum.page_stored_bytes, sum.page_raw_bytes);

@@ -15,6 +15,7 @@
 
 #include "gl_renderer.h"
 #include "package_view.h"
+#include "package_summary.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "parametric_render_support.h"
@@ -223,6 +224,13 @@ TEST_F(ParametricRendering, SealedPipeRunCullsBackFacesUntilTheEyeIsInside) {
     return members_closers;
   };
   EXPECT_EQ(roles(sealed), std::make_pair(3, 2));
+  {  // `terawalk info` counts them
+    const PackageSummary summary =
+        summarizePackage(PackageView::open(sealed, PackageView::Verify::Headers));
+    EXPECT_TRUE(summary.sealed_runs_marked);
+    EXPECT_EQ(summary.sealed_run_members, 3u);
+    EXPECT_EQ(summary.sealed_run_closers, 2u);
+  }
   const Frame culled = render(sealed, outside, ParametricMode::Tessellated);
   const Frame mesh = render(buildPackage("sealed_run_mesh", pipeRun(true), true), outside,
                             ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);

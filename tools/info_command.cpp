@@ -168,6 +168,9 @@ nlohmann::json packageToJson(const PackageSummary& s) {
     prims[packagePrimitiveTypeName(t)] = s.instances_by_type[t];
   j["instances"] = {
       {"total", s.instances}, {"by_type", prims}, {"profile_points", s.profile_points}};
+  j["sealed_runs"] = {{"marked", s.sealed_runs_marked},
+                      {"members", s.sealed_run_members},
+                      {"closers", s.sealed_run_closers}};
   j["objects"] = s.objects;
   j["objects_with_db_key"] = s.objects_with_db_key;
   j["closed_objects"] = s.closed_objects;
@@ -249,6 +252,11 @@ void printPackage(const PackageSummary& s, double seconds) {
       if (s.instances_by_type[t])
         std::printf(" %s %llu", packagePrimitiveTypeName(t), ull(s.instances_by_type[t]));
     std::printf("\n");
+    if (s.sealed_runs_marked)
+      std::printf("sealed runs %llu open parts, %llu closing cylinders (found by the preprocessor)\n",
+                  ull(s.sealed_run_members), ull(s.sealed_run_closers));
+    else
+      std::printf("sealed runs not marked (the runtime searches at start-up)\n");
   }
   std::printf("objects     %llu (%llu with a database key, %llu closed solids)\n", ull(s.objects),
               ull(s.objects_with_db_key), ull(s.closed_objects));
