@@ -1,6 +1,7 @@
-// Time of findSealedRuns() (runtime/sealed_pipe_runs.h), which the runtime runs once at start-up
-// beside the first page loads: on the instance table of TW_SEALED_RUNS_PACKAGE (a preprocessed
-// plant), and on 20,000 synthetic flanged L-shaped runs (100,000 instances) when none is given.
+// Time of findSealedRuns() (formats/sealed_pipe_runs.h), which the preprocessor runs once (and the
+// runtime at start-up for packages that do not carry its result): on the instance table of
+// TW_SEALED_RUNS_PACKAGE (a preprocessed plant), and on 20,000 synthetic flanged L-shaped runs
+// (100,000 instances) when none is given.
 //
 //   TW_SEALED_RUNS_PACKAGE=plant-10M.twk build/bench/bench_sealed_runs --benchmark_repetitions=5
 //
