@@ -135,7 +135,7 @@ void BrickCache::clear() {
 std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   ByteWriter w;
   w.put(uint32_t{0x53425754u});  // "TWBS"
-  w.put(uint32_t{1});
+  w.put(uint32_t{2});  // 2: triangles_turned (bricks of 1 were built without turning)
   w.put(scene.origin);
   w.put(scene.max_brick_triangles);
   w.put(scene.grid);
@@ -152,6 +152,7 @@ std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   w.putString(scene.parametrics_file);
   w.put(scene.parametric_count);
   w.put(scene.triangle_count);
+  w.put(scene.triangles_turned);
   const BrickingStats& st = scene.stats;
   for (uint64_t v : {st.buffer_cap_bytes, st.peak_buffered_bytes, st.flushes,
                      st.spill_bytes_written, st.object_table_bytes})
@@ -165,7 +166,7 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
                                      const std::string& source) {
   ByteReader r(bytes, source);
   if (r.get<uint32_t>() != 0x53425754u) r.fail("not a bricked scene description (bad magic)");
-  if (r.get<uint32_t>() != 1) r.fail("unsupported bricked scene version");
+  if (r.get<uint32_t>() != 2) r.fail("unsupported bricked scene version");
   BrickedScene scene;
   scene.work_dir = work_dir;
   scene.origin = r.get<glm::dvec3>();
@@ -200,6 +201,7 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
   scene.parametric_count = r.get<uint64_t>();
   scene.triangle_count = r.get<uint64_t>();
   if (scene.triangle_count != sum) r.fail("triangle total differs from the sum over bricks");
+  scene.triangles_turned = r.get<uint64_t>();
   for (const std::string* f :
        {&scene.objects_file, &scene.object_bounds_file, &scene.parametrics_file})
     if (f->empty() || f->find('/') != std::string::npos || *f == "..")

@@ -24,6 +24,7 @@ WeldedTriangles weldExactly(const TriangleMesh& mesh) {
     return remap[index];
   };
   out.triangles.reserve(mesh.indices.size() / 3);
+  out.sources.reserve(mesh.indices.size() / 3);
   for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
     const uint32_t i0 = mesh.indices[t], i1 = mesh.indices[t + 1], i2 = mesh.indices[t + 2];
     if (i0 >= vertex_count || i1 >= vertex_count || i2 >= vertex_count) {
@@ -36,6 +37,7 @@ WeldedTriangles weldExactly(const TriangleMesh& mesh) {
       continue;
     }
     out.triangles.push_back({a, b, c});
+    out.sources.push_back(static_cast<uint32_t>(t / 3));
   }
   return out;
 }

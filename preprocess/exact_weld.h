@@ -19,6 +19,7 @@ struct WeldedTriangles {
   std::vector<glm::vec3> points;                   // distinct positions (bitwise, -0 == +0) used
                                                    // by faces, in order of first use
   std::vector<std::array<uint32_t, 3>> triangles;  // indices into points
+  std::vector<uint32_t> sources;  // for each of `triangles`, its index in the mesh (indices / 3)
   uint64_t skipped = 0;  // triangles with an index out of range or a repeated welded vertex
 };
 

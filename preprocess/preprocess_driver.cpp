@@ -224,6 +224,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   report.input_triangles = scene.triangle_count;
   report.primitives = scene.parametric_count;
   report.objects = scene.object_count;
+  report.triangles_turned = scene.triangles_turned;
   report.bricks = static_cast<uint32_t>(scene.bricks.size());
 
   // 2. One LOD DAG per brick, seams locked so neighbouring bricks never crack. A finished brick

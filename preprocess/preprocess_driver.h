@@ -82,6 +82,7 @@ struct PreprocessReport {
   uint64_t clusters = 0;
   uint64_t parametric_clusters = 0;
   uint32_t parametric_sort_runs = 0;  // sorted runs the parametric clustering spilled (0: in memory)
+  uint64_t triangles_turned = 0;      // mesh triangles reversed to agree with their piece
   uint64_t sealed_run_members = 0;    // instances marked as open parts of sealed pipe runs
   uint64_t sealed_run_closers = 0;    // and as the capped cylinders closing them
   uint64_t package_bytes = 0;

@@ -17,6 +17,7 @@
 
 #include "byte_packing.h"
 #include "closed_surface.h"
+#include "consistent_winding.h"
 #include "file_reader.h"
 #include "format_error.h"
 #include "nurbs_conforming.h"
@@ -430,7 +431,16 @@ class BrickingSink : public SceneSink {
     object_bounds_[dense].max = glm::max(object_bounds_[dense].max, p);
   }
 
-  void addMesh(const TriangleMesh& mesh, const Transform& t, uint32_t dense) {
+  void addMesh(const TriangleMesh& input, const Transform& t, uint32_t dense) {
+    // Triangles wound against their neighbours are turned first, so that edge collapse can
+    // coarsen the piece and a closed piece can count as a solid (consistent_winding.h).
+    const std::vector<uint32_t> turn = trianglesToTurn(input);
+    if (!turn.empty()) {
+      turned_mesh_ = input;
+      turnTriangles(turned_mesh_, turn);
+      scene_.triangles_turned += turn.size();
+    }
+    const TriangleMesh& mesh = turn.empty() ? input : turned_mesh_;
     // An object is a closed solid when each of its mesh pieces is one (closed_surface.h). The
     // transform must keep the orientation: a mirror turns the surface inside out.
     uint32_t& surface = object_bounds_[dense].surface;
@@ -529,6 +539,7 @@ class BrickingSink : public SceneSink {
   bool has_last_ = false;
   uint32_t last_id_ = 0, last_dense_ = 0;
   std::vector<glm::dvec3> relative_;
+  TriangleMesh turned_mesh_;  // addMesh: the input with some triangles reversed
 };
 
 // Splits an over-full brick file into two by streaming it: halves its centroid bounds along the

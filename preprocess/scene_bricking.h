@@ -110,6 +110,7 @@ struct BrickedScene {
   std::string parametrics_file;
   uint64_t parametric_count = 0;
   uint64_t triangle_count = 0;  // sum over bricks
+  uint64_t triangles_turned = 0;  // wound against their piece, reversed (consistent_winding.h)
   BrickingStats stats;
 };
 

@@ -12,6 +12,7 @@
 
 #include "brick_cache.h"
 #include "file_reader.h"
+#include "consistent_winding.h"
 #include "scene_bricking.h"
 #include "scene_io.h"
 #include "tessellate.h"
@@ -123,9 +124,11 @@ struct Tri {
 };
 
 // The input's triangles as the bricker must store them: world position (double) minus origin,
-// rounded to float once; NURBS tessellated at the same tolerance.
+// rounded to float once; NURBS tessellated at the same tolerance; triangles wound against their
+// piece turned (consistent_winding.h), counted in `turned`.
 std::vector<Tri> referenceTriangles(const std::vector<fs::path>& inputs, const glm::dvec3& origin,
-                                    float tolerance, std::vector<SceneObject>* primitives) {
+                                    float tolerance, std::vector<SceneObject>* primitives,
+                                    uint64_t* turned = nullptr) {
   std::vector<Tri> out;
   for (uint32_t i = 0; i < inputs.size(); ++i) {
     test::CollectingSink sink;
@@ -138,6 +141,9 @@ std::vector<Tri> referenceTriangles(const std::vector<fs::path>& inputs, const g
         tessellateNurbsConforming(*n, tolerance, mesh);
       else if (primitives)
         primitives->push_back(o);
+      const std::vector<uint32_t> turn = trianglesToTurn(mesh);
+      turnTriangles(mesh, turn);
+      if (turned) *turned += turn.size();
       for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
         Tri tri{{i, o.info.id}, {}};
         for (int k = 0; k < 3; ++k) {
@@ -207,10 +213,13 @@ TEST(SceneBricking, BricksHoldExactlyTheInputTriangles) {
   EXPECT_EQ(scene.origin, glm::round(survey.bounds.center()));
 
   std::vector<SceneObject> primitives;
-  auto expected = referenceTriangles(in.paths, scene.origin, options.nurbs_tolerance, &primitives);
+  uint64_t turned = 0;
+  auto expected =
+      referenceTriangles(in.paths, scene.origin, options.nurbs_tolerance, &primitives, &turned);
   auto actual = brickTriangles(scene);
   ASSERT_EQ(actual.size(), expected.size());
   EXPECT_TRUE(actual == expected);
+  EXPECT_EQ(scene.triangles_turned, turned);
 
   // Brick bounds enclose their triangles.
   for (uint32_t b = 0; b < scene.bricks.size(); ++b) {

@@ -40,6 +40,8 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
   std::printf("  clusters    %llu mesh, %llu parametric (%u sorted runs on disk)\n",
               static_cast<unsigned long long>(r.clusters),
               static_cast<unsigned long long>(r.parametric_clusters), r.parametric_sort_runs);
+  std::printf("  winding     %llu mesh triangles turned to agree with their piece\n",
+              static_cast<unsigned long long>(r.triangles_turned));
   std::printf("  sealed runs %llu open parts, %llu closing cylinders\n",
               static_cast<unsigned long long>(r.sealed_run_members),
               static_cast<unsigned long long>(r.sealed_run_closers));
