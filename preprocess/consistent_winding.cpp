@@ -45,34 +45,34 @@ std::vector<uint32_t> trianglesToTurn(const TriangleMesh& mesh, WindingReport* r
     return x.key != y.key ? x.key < y.key : x.triangle < y.triangle;
   });
 
-  // Links through edges used by exactly two triangles; a triangle with any other edge is on an open
-  // border (or a non-manifold junction), which makes its piece open.
-  std::vector<uint32_t> link_count(n + 1, 0);
+  // Joins through edges used by exactly two triangles; a triangle with any other edge is on an
+  // open border (or a non-manifold junction), which makes its piece open.
+  struct Join {
+    uint32_t a, b;
+    bool differ;
+  };
+  std::vector<Join> joins;
   std::vector<uint8_t> open_edge(n, 0);
   for (size_t i = 0; i < uses.size();) {
     size_t j = i;
     while (j < uses.size() && uses[j].key == uses[i].key) ++j;
     if (j - i == 2 && uses[i].triangle != uses[i + 1].triangle) {
-      ++link_count[uses[i].triangle];
-      ++link_count[uses[i + 1].triangle];
+      joins.push_back(
+          {uses[i].triangle, uses[i + 1].triangle, uses[i].forward == uses[i + 1].forward});
     } else {
       for (size_t k = i; k < j; ++k) open_edge[uses[k].triangle] = 1;
     }
     i = j;
   }
+  // The joins as adjacency lists (links[first[t] .. first[t + 1]) are triangle t's).
   std::vector<uint32_t> first(n + 1, 0);
-  for (uint32_t t = 0; t < n; ++t) first[t + 1] = first[t] + link_count[t];
+  for (const Join& join : joins) ++first[join.a + 1], ++first[join.b + 1];
+  for (uint32_t t = 0; t < n; ++t) first[t + 1] += first[t];
   std::vector<Link> links(first[n]);
   std::vector<uint32_t> fill(first.begin(), first.end() - 1);
-  for (size_t i = 0; i < uses.size();) {
-    size_t j = i;
-    while (j < uses.size() && uses[j].key == uses[i].key) ++j;
-    if (j - i == 2 && uses[i].triangle != uses[i + 1].triangle) {
-      const bool differ = uses[i].forward == uses[i + 1].forward;
-      links[fill[uses[i].triangle]++] = {uses[i + 1].triangle, differ};
-      links[fill[uses[i + 1].triangle]++] = {uses[i].triangle, differ};
-    }
-    i = j;
+  for (const Join& join : joins) {
+    links[fill[join.a]++] = {join.b, join.differ};
+    links[fill[join.b]++] = {join.a, join.differ};
   }
 
   const std::vector<glm::vec3>& points = welded.points;
