@@ -490,7 +490,8 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     return local < vcount ? l2g[local] : first_new + (local - uint32_t(vcount));
   };
   outcome.new_positions = std::move(best.extra);
-  TriangleClusters split = clusterizeTriangles(lpos, best.tris, options.cluster_size);
+  TriangleClusters split =
+      clusterizeTrianglesByObject(lpos, best.tris, best.ids, options.cluster_size);
   outcome.clusters.resize(split.clusterCount());
   for (size_t c = 0; c < split.clusterCount(); ++c) {
     WorkCluster& wc = outcome.clusters[c];
@@ -595,7 +596,8 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
   std::vector<std::vector<uint32_t>> front_tris;
   std::vector<uint32_t> front_ids;
   {
-    TriangleClusters split = clusterizeTriangles(positions, tris, options.cluster_size);
+    TriangleClusters split =
+        clusterizeTrianglesByObject(positions, tris, ids, options.cluster_size);
     if (options.position_step_m > 0.0) {
       GridWeld weld = weldOnPackageGrid(positions, tris, split,
                                         lockedSeamVertices(positions, tris, options),
@@ -698,13 +700,21 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     std::vector<GroupOutcome> outcomes;
     uint64_t new_triangles = 0;
     bool shrunk = false;
-    std::vector<std::span<const uint32_t>> cluster_tris;
+    std::vector<std::span<const uint32_t>> cluster_tris, cluster_ids;
     cluster_tris.reserve(current_work.size());
-    for (const WorkCluster& wc : current_work) cluster_tris.push_back(wc.tris);
+    cluster_ids.reserve(current_work.size());
+    for (const WorkCluster& wc : current_work) {
+      cluster_tris.push_back(wc.tris);
+      cluster_ids.push_back(wc.ids);
+    }
     for (uint64_t group_size = options.group_size;; group_size *= 2) {
-      groups = groupClusters(cluster_tris, centers,
-                             uint32_t(std::min<uint64_t>(group_size, current_work.size())),
-                             level_positions.size());
+      // Large objects are grouped apart, except in a last attempt with the whole level as one
+      // group (which ends the retries).
+      const uint32_t size = uint32_t(std::min<uint64_t>(group_size, current_work.size()));
+      groups = size < current_work.size()
+                   ? groupClustersByObject(cluster_tris, cluster_ids, centers, size,
+                                           options.cluster_size, level_positions.size())
+                   : groupClusters(cluster_tris, centers, size, level_positions.size());
       // Which vertices and edges are shared between groups: those are the locked borders.
       // Only the level's own vertices are ever read: reset those, not the whole model's.
       for (const WorkCluster& wc : current_work)

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <unordered_map>
 
 #include <metis.h>
 
@@ -131,6 +132,71 @@ std::vector<std::vector<uint32_t>> groupClusters(
   for (size_t c = 0; c < n; ++c) groups[size_t(part[c])].push_back(uint32_t(c));
   groups.erase(std::remove_if(groups.begin(), groups.end(), [](const auto& g) { return g.empty(); }),
                groups.end());
+  return groups;
+}
+
+std::vector<std::vector<uint32_t>> groupClustersByObject(
+    std::span<const std::span<const uint32_t>> cluster_tris,
+    std::span<const std::span<const uint32_t>> cluster_ids, std::span<const glm::vec3> centers,
+    uint32_t group_size, uint32_t large_triangles, size_t vertex_count) {
+  const size_t n = cluster_tris.size();
+  // The object of each single-object cluster, and the triangles such clusters hold per object.
+  std::vector<uint32_t> owner(n, kUnowned);
+  std::unordered_map<uint32_t, uint64_t> owned_triangles;
+  for (size_t c = 0; c < n; ++c) {
+    const auto ids = cluster_ids[c];
+    if (ids.empty() || !std::all_of(ids.begin(), ids.end(), [&](uint32_t id) { return id == ids[0]; }))
+      continue;
+    owner[c] = ids[0];
+    owned_triangles[ids[0]] += ids.size();
+  }
+  // Sets by first cluster: one per large object, one shared.
+  std::unordered_map<uint32_t, uint32_t> set_of_object;
+  std::vector<std::vector<uint32_t>> sets;
+  uint32_t shared_set = kUnowned;
+  for (size_t c = 0; c < n; ++c) {
+    uint32_t set;
+    if (owner[c] != kUnowned && owned_triangles[owner[c]] >= large_triangles) {
+      auto [it, fresh] = set_of_object.try_emplace(owner[c], uint32_t(sets.size()));
+      if (fresh) sets.emplace_back();
+      set = it->second;
+    } else {
+      if (shared_set == kUnowned) {
+        shared_set = uint32_t(sets.size());
+        sets.emplace_back();
+      }
+      set = shared_set;
+    }
+    sets[set].push_back(uint32_t(c));
+  }
+  if (sets.size() <= 1) return groupClusters(cluster_tris, centers, group_size, vertex_count);
+
+  // Each set with its own compact vertex numbering, so that many small sets cost what one does.
+  std::vector<uint32_t> local(vertex_count, kUnowned);
+  std::vector<std::vector<uint32_t>> groups;
+  for (const std::vector<uint32_t>& set : sets) {
+    std::vector<uint32_t> touched;
+    std::vector<std::vector<uint32_t>> set_tris(set.size());
+    std::vector<glm::vec3> set_centers;
+    for (size_t k = 0; k < set.size(); ++k) {
+      for (uint32_t v : cluster_tris[set[k]]) {
+        if (local[v] == kUnowned) {
+          local[v] = uint32_t(touched.size());
+          touched.push_back(v);
+        }
+        set_tris[k].push_back(local[v]);
+      }
+      set_centers.push_back(centers[set[k]]);
+    }
+    std::vector<std::span<const uint32_t>> spans(set_tris.begin(), set_tris.end());
+    for (std::vector<uint32_t>& group :
+         groupClusters(spans, set_centers, std::min<uint32_t>(group_size, uint32_t(set.size())),
+                       touched.size())) {
+      for (uint32_t& member : group) member = set[member];
+      groups.push_back(std::move(group));
+    }
+    for (uint32_t v : touched) local[v] = kUnowned;
+  }
   return groups;
 }
 

@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace tw {
 
@@ -80,6 +82,57 @@ TriangleClusters clusterizeTriangles(std::span<const glm::vec3> positions,
   result.offsets.push_back(0);
   Splitter splitter{centroids, result.triangles, result.offsets, max_triangles};
   splitter.split(0, triangle_count);
+  return result;
+}
+
+TriangleClusters clusterizeTrianglesByObject(std::span<const glm::vec3> positions,
+                                             std::span<const uint32_t> indices,
+                                             std::span<const uint32_t> triangle_objects,
+                                             uint32_t max_triangles) {
+  const size_t triangle_count = indices.size() / 3;
+  if (triangle_objects.size() != triangle_count)
+    throw std::invalid_argument("clusterizeTrianglesByObject: one object id per triangle needed");
+  // Triangles per object, then the sets: each large object alone, every other triangle in one
+  // shared set. A set is known by its first triangle, which orders the sets deterministically.
+  std::unordered_map<uint32_t, uint32_t> per_object;
+  for (uint32_t object : triangle_objects) ++per_object[object];
+  const uint32_t large = std::max<uint32_t>(1, max_triangles / 2);
+  std::unordered_map<uint32_t, uint32_t> set_of_object;  // large object -> set
+  std::vector<std::vector<uint32_t>> sets;               // triangle indices per set
+  uint32_t shared_set = std::numeric_limits<uint32_t>::max();
+  for (size_t t = 0; t < triangle_count; ++t) {
+    const uint32_t object = triangle_objects[t];
+    uint32_t set;
+    if (per_object[object] >= large) {
+      auto [it, fresh] = set_of_object.try_emplace(object, uint32_t(sets.size()));
+      if (fresh) sets.emplace_back();
+      set = it->second;
+    } else {
+      if (shared_set == std::numeric_limits<uint32_t>::max()) {
+        shared_set = uint32_t(sets.size());
+        sets.emplace_back();
+      }
+      set = shared_set;
+    }
+    sets[set].push_back(uint32_t(t));
+  }
+  if (sets.size() <= 1) return clusterizeTriangles(positions, indices, max_triangles);
+
+  TriangleClusters result;
+  result.triangles.reserve(triangle_count);
+  result.offsets.push_back(0);
+  std::vector<uint32_t> set_indices;
+  for (const std::vector<uint32_t>& set : sets) {
+    set_indices.clear();
+    for (uint32_t t : set)
+      set_indices.insert(set_indices.end(), indices.begin() + 3 * t, indices.begin() + 3 * t + 3);
+    TriangleClusters part = clusterizeTriangles(positions, set_indices, max_triangles);
+    for (size_t c = 0; c < part.clusterCount(); ++c) {
+      for (uint32_t i = part.offsets[c]; i < part.offsets[c + 1]; ++i)
+        result.triangles.push_back(set[part.triangles[i]]);
+      result.offsets.push_back(uint32_t(result.triangles.size()));
+    }
+  }
   return result;
 }
 

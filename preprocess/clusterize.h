@@ -36,4 +36,16 @@ struct TriangleClusters {
 TriangleClusters clusterizeTriangles(std::span<const glm::vec3> positions,
                                      std::span<const uint32_t> indices, uint32_t max_triangles);
 
+// As clusterizeTriangles, but no cluster mixes a large object (at least max_triangles / 2
+// triangles here) with any other object: each large object is split alone, and the triangles of
+// all smaller objects together. Why: a group's error is its worst part's, so a hull whose
+// clusters also hold small parts inherits the error of dropping them and stays fine far longer
+// than its own surface needs. Sizes differ by at most one triangle within each of those sets.
+// Same errors as clusterizeTriangles, and std::invalid_argument when triangle_objects does not
+// hold one id per triangle.
+TriangleClusters clusterizeTrianglesByObject(std::span<const glm::vec3> positions,
+                                             std::span<const uint32_t> indices,
+                                             std::span<const uint32_t> triangle_objects,
+                                             uint32_t max_triangles);
+
 }  // namespace tw

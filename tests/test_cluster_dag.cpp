@@ -384,6 +384,85 @@ TEST(Clusterize, BalancedCompactClusters) {
   EXPECT_THROW(tw::clusterizeTriangles(m.positions, m.indices, 0), std::invalid_argument);
 }
 
+TEST(Clusterize, ByObjectKeepsLargeObjectsApart) {
+  Mesh sphere = icosphere(4, 20.0f);  // 5120 triangles, object 1
+  for (glm::vec3& p : sphere.positions) p += glm::vec3(20.0f, 20.0f, 5.0f);
+  Mesh m = scatteredBoxes(400, 3);  // 4800 triangles, 12 each, objects 1000..1399
+  const uint32_t base = uint32_t(m.positions.size());
+  m.positions.insert(m.positions.end(), sphere.positions.begin(), sphere.positions.end());
+  for (uint32_t v : sphere.indices) m.indices.push_back(base + v);
+  m.ids.insert(m.ids.end(), sphere.ids.begin(), sphere.ids.end());
+
+  auto clusters = tw::clusterizeTrianglesByObject(m.positions, m.indices, m.ids, 256);
+  std::vector<uint32_t> seen(m.triangles(), 0);
+  size_t sphere_clusters = 0;
+  for (size_t c = 0; c < clusters.clusterCount(); ++c) {
+    const uint32_t size = clusters.offsets[c + 1] - clusters.offsets[c];
+    EXPECT_LE(size, 256u);
+    std::set<uint32_t> objects;
+    for (uint32_t i = clusters.offsets[c]; i < clusters.offsets[c + 1]; ++i) {
+      ++seen[clusters.triangles[i]];
+      objects.insert(m.ids[clusters.triangles[i]]);
+    }
+    if (objects.count(1)) {
+      ++sphere_clusters;
+      EXPECT_EQ(objects.size(), 1u) << "cluster " << c << " mixes the sphere with small parts";
+    }
+  }
+  EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](uint32_t n) { return n == 1; }));
+  EXPECT_EQ(sphere_clusters, (5120u + 255u) / 256u);
+  // Plain bisection mixes them: the test above would fail for it.
+  auto plain = tw::clusterizeTriangles(m.positions, m.indices, 256);
+  size_t mixed = 0;
+  for (size_t c = 0; c < plain.clusterCount(); ++c) {
+    std::set<uint32_t> objects;
+    for (uint32_t i = plain.offsets[c]; i < plain.offsets[c + 1]; ++i)
+      objects.insert(m.ids[plain.triangles[i]]);
+    mixed += objects.count(1) && objects.size() > 1;
+  }
+  EXPECT_GT(mixed, 0u);
+  // One object only, or none large: the same clusters as plain bisection.
+  auto alone = tw::clusterizeTrianglesByObject(sphere.positions, sphere.indices, sphere.ids, 256);
+  auto alone_plain = tw::clusterizeTriangles(sphere.positions, sphere.indices, 256);
+  EXPECT_EQ(alone.triangles, alone_plain.triangles);
+  EXPECT_EQ(alone.offsets, alone_plain.offsets);
+  std::vector<uint32_t> short_ids(m.triangles() - 1, 1);
+  EXPECT_THROW(tw::clusterizeTrianglesByObject(m.positions, m.indices, short_ids, 256),
+               std::invalid_argument);
+}
+
+// A large smooth surface among many small parts coarsens as it would alone: the error of
+// simplifying the parts (dropping or merging them, errors about their size) does not hold its
+// triangles fine. Before clusters and groups kept large objects apart, the sphere below drew
+// 1,786 triangles among the parts at 0.3 m against 640 alone (4,342 against 2,560 at 0.1 m).
+TEST(ClusterDag, SmallPartsDoNotHoldALargeSurfaceFine) {
+  Mesh sphere = icosphere(5, 20.0f);  // 20480 triangles, object 1
+  for (glm::vec3& p : sphere.positions) p += glm::vec3(20.0f, 20.0f, 5.0f);
+  Mesh m = scatteredBoxes(1500, 5);
+  const uint32_t base = uint32_t(m.positions.size());
+  m.positions.insert(m.positions.end(), sphere.positions.begin(), sphere.positions.end());
+  for (uint32_t v : sphere.indices) m.indices.push_back(base + v);
+  m.ids.insert(m.ids.end(), sphere.ids.begin(), sphere.ids.end());
+  DagOptions options;
+  options.cluster_size = 256;
+  ClusterDag mixed = tw::buildClusterDag(m.input(), options);
+  ClusterDag alone = tw::buildClusterDag(sphere.input(), options);
+  expectWellFormed(mixed, options, m.triangles());
+  auto sphereTriangles = [](const ClusterDag& dag, float tau) {
+    size_t n = 0;
+    for (uint32_t c : tw::selectCut(dag, tau))
+      for (uint32_t id : dag.clusters[c].triangle_object_ids) n += id == 1;
+    return n;
+  };
+  for (float tau : {0.1f, 0.3f, 1.0f}) {
+    const size_t with_parts = sphereTriangles(mixed, tau), by_itself = sphereTriangles(alone, tau);
+    std::printf("tau %.1f m: sphere %zu triangles among the parts, %zu alone\n", tau, with_parts,
+                by_itself);
+    EXPECT_GT(with_parts, 0u);
+    EXPECT_LE(with_parts, by_itself * 3 / 2 + 256) << "tau " << tau;
+  }
+}
+
 TEST(ClusterDag, IcosphereCutsAreClosedAtEveryThreshold) {
   Mesh m = icosphere(5);  // 20480 triangles
   DagOptions options;
