@@ -11,6 +11,7 @@
 #include <metis.h>
 
 #include "edge_counts.h"
+#include "object_sets.h"
 
 namespace tw {
 
@@ -141,7 +142,7 @@ std::vector<std::vector<uint32_t>> groupClustersByObject(
     uint32_t group_size, uint32_t large_triangles, size_t vertex_count) {
   const size_t n = cluster_tris.size();
   // The object of each single-object cluster, and the triangles such clusters hold per object.
-  std::vector<uint32_t> owner(n, kUnowned);
+  std::vector<uint32_t> owner(n, kNoObject);
   std::unordered_map<uint32_t, uint64_t> owned_triangles;
   for (size_t c = 0; c < n; ++c) {
     const auto ids = cluster_ids[c];
@@ -150,25 +151,9 @@ std::vector<std::vector<uint32_t>> groupClustersByObject(
     owner[c] = ids[0];
     owned_triangles[ids[0]] += ids.size();
   }
-  // Sets by first cluster: one per large object, one shared.
-  std::unordered_map<uint32_t, uint32_t> set_of_object;
-  std::vector<std::vector<uint32_t>> sets;
-  uint32_t shared_set = kUnowned;
-  for (size_t c = 0; c < n; ++c) {
-    uint32_t set;
-    if (owner[c] != kUnowned && owned_triangles[owner[c]] >= large_triangles) {
-      auto [it, fresh] = set_of_object.try_emplace(owner[c], uint32_t(sets.size()));
-      if (fresh) sets.emplace_back();
-      set = it->second;
-    } else {
-      if (shared_set == kUnowned) {
-        shared_set = uint32_t(sets.size());
-        sets.emplace_back();
-      }
-      set = shared_set;
-    }
-    sets[set].push_back(uint32_t(c));
-  }
+  const std::vector<std::vector<uint32_t>> sets = setsByLargeObject(
+      n, [&](size_t c) { return owner[c]; },
+      [&](uint32_t object) { return owned_triangles[object] >= large_triangles; });
   if (sets.size() <= 1) return groupClusters(cluster_tris, centers, group_size, vertex_count);
 
   // Each set with its own compact vertex numbering, so that many small sets cost what one does.

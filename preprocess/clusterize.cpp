@@ -1,12 +1,14 @@
-// Recursive median bisection of triangle centroids into balanced clusters (see clusterize.h).
+// Recursive median bisection of triangle centroids into balanced clusters, with large objects
+// kept apart (see clusterize.h).
 #include "clusterize.h"
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <unordered_map>
+
+#include "object_sets.h"
 
 namespace tw {
 
@@ -93,29 +95,13 @@ TriangleClusters clusterizeTrianglesByObject(std::span<const glm::vec3> position
   if (triangle_objects.size() != triangle_count)
     throw std::invalid_argument("clusterizeTrianglesByObject: one object id per triangle needed");
   // Triangles per object, then the sets: each large object alone, every other triangle in one
-  // shared set. A set is known by its first triangle, which orders the sets deterministically.
+  // shared set.
   std::unordered_map<uint32_t, uint32_t> per_object;
   for (uint32_t object : triangle_objects) ++per_object[object];
   const uint32_t large = std::max<uint32_t>(1, max_triangles / 2);
-  std::unordered_map<uint32_t, uint32_t> set_of_object;  // large object -> set
-  std::vector<std::vector<uint32_t>> sets;               // triangle indices per set
-  uint32_t shared_set = std::numeric_limits<uint32_t>::max();
-  for (size_t t = 0; t < triangle_count; ++t) {
-    const uint32_t object = triangle_objects[t];
-    uint32_t set;
-    if (per_object[object] >= large) {
-      auto [it, fresh] = set_of_object.try_emplace(object, uint32_t(sets.size()));
-      if (fresh) sets.emplace_back();
-      set = it->second;
-    } else {
-      if (shared_set == std::numeric_limits<uint32_t>::max()) {
-        shared_set = uint32_t(sets.size());
-        sets.emplace_back();
-      }
-      set = shared_set;
-    }
-    sets[set].push_back(uint32_t(t));
-  }
+  const std::vector<std::vector<uint32_t>> sets = setsByLargeObject(
+      triangle_count, [&](size_t t) { return triangle_objects[t]; },
+      [&](uint32_t object) { return per_object[object] >= large; });
   if (sets.size() <= 1) return clusterizeTriangles(positions, indices, max_triangles);
 
   TriangleClusters result;
