@@ -86,6 +86,14 @@ Mesh torus(uint32_t nu, uint32_t nv, float major = 3.0f, float minor = 1.0f) {
 }
 
 // `count` closed boxes of 12 triangles with their own vertices, scattered in a plant-like volume.
+// Adds `from`'s triangles (with their object ids) to `to`.
+void appendMesh(Mesh& to, const Mesh& from) {
+  const uint32_t base = uint32_t(to.positions.size());
+  to.positions.insert(to.positions.end(), from.positions.begin(), from.positions.end());
+  for (uint32_t v : from.indices) to.indices.push_back(base + v);
+  to.ids.insert(to.ids.end(), from.ids.begin(), from.ids.end());
+}
+
 Mesh scatteredBoxes(uint32_t count, uint32_t seed) {
   Mesh m;
   std::mt19937 rng(seed);
@@ -388,10 +396,7 @@ TEST(Clusterize, ByObjectKeepsLargeObjectsApart) {
   Mesh sphere = icosphere(4, 20.0f);  // 5120 triangles, object 1
   for (glm::vec3& p : sphere.positions) p += glm::vec3(20.0f, 20.0f, 5.0f);
   Mesh m = scatteredBoxes(400, 3);  // 4800 triangles, 12 each, objects 1000..1399
-  const uint32_t base = uint32_t(m.positions.size());
-  m.positions.insert(m.positions.end(), sphere.positions.begin(), sphere.positions.end());
-  for (uint32_t v : sphere.indices) m.indices.push_back(base + v);
-  m.ids.insert(m.ids.end(), sphere.ids.begin(), sphere.ids.end());
+  appendMesh(m, sphere);
 
   auto clusters = tw::clusterizeTrianglesByObject(m.positions, m.indices, m.ids, 256);
   std::vector<uint32_t> seen(m.triangles(), 0);
@@ -439,10 +444,7 @@ TEST(ClusterDag, SmallPartsDoNotHoldALargeSurfaceFine) {
   Mesh sphere = icosphere(5, 20.0f);  // 20480 triangles, object 1
   for (glm::vec3& p : sphere.positions) p += glm::vec3(20.0f, 20.0f, 5.0f);
   Mesh m = scatteredBoxes(1500, 5);
-  const uint32_t base = uint32_t(m.positions.size());
-  m.positions.insert(m.positions.end(), sphere.positions.begin(), sphere.positions.end());
-  for (uint32_t v : sphere.indices) m.indices.push_back(base + v);
-  m.ids.insert(m.ids.end(), sphere.ids.begin(), sphere.ids.end());
+  appendMesh(m, sphere);
   DagOptions options;
   options.cluster_size = 256;
   ClusterDag mixed = tw::buildClusterDag(m.input(), options);
