@@ -10,7 +10,10 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <atomic>
 #include <future>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
@@ -20,6 +23,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "camera.h"
 #include "gl_program.h"
@@ -350,8 +354,6 @@ glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, con
   }
 }
 
-uint32_t meshKey(Shape shape, uint32_t a, uint32_t b) { return (uint32_t(shape) << 24) | (a << 12) | b; }
-
 }  // namespace
 
 // One vertex of the per-frame batch: 20 bytes.
@@ -359,6 +361,53 @@ struct SmoothVertex {
   glm::vec3 position;  // metres from the eye
   uint32_t object;     // object index
   uint32_t normal;     // packNormal
+};
+
+// A unit mesh with arrays of its own (base_vertex and first_index 0), so that threads expanding
+// instances read it while another thread makes a mesh they have not met yet.
+struct OwnedUnitMesh {
+  UnitMesh mesh;
+  std::vector<glm::vec4> shapes;
+  std::vector<uint32_t> indices;
+};
+
+// What expanding a run of clusters produces: prepare() splits the frame's clusters into runs
+// expanded on TBB, each into a part of its own, and appends the parts in cluster order, so the
+// batch is the one a single thread makes.
+struct ExpandedPart {
+  std::vector<SmoothVertex> vertices;
+  std::array<std::vector<uint32_t>, kBatchCount> indices;
+  // Drawn (both passes), hidden last frame (first pass), to test (second pass): cluster, instance.
+  std::vector<std::pair<uint32_t, uint32_t>> drawn, deferred, to_test;
+  std::vector<ParametricMeshInstance> profiles;
+  InstanceLodStats stats;
+  std::vector<glm::vec2> kept, ring;  // lathe scratch
+  ProfileSimplifier simplifier;
+
+  void clear() {
+    vertices.clear();
+    for (auto& list : indices) list.clear();
+    drawn.clear();
+    deferred.clear();
+    to_test.clear();
+    profiles.clear();
+    stats = {};
+  }
+  // Appends `part` after this one's contents.
+  void append(const ExpandedPart& part) {
+    const auto base = static_cast<uint32_t>(vertices.size());
+    vertices.insert(vertices.end(), part.vertices.begin(), part.vertices.end());
+    for (uint32_t batch = 0; batch < kBatchCount; ++batch)
+      for (uint32_t index : part.indices[batch]) indices[batch].push_back(base + index);
+    drawn.insert(drawn.end(), part.drawn.begin(), part.drawn.end());
+    deferred.insert(deferred.end(), part.deferred.begin(), part.deferred.end());
+    to_test.insert(to_test.end(), part.to_test.begin(), part.to_test.end());
+    profiles.insert(profiles.end(), part.profiles.begin(), part.profiles.end());
+    stats.instances_drawn += part.stats.instances_drawn;
+    stats.instances_culled += part.stats.instances_culled;
+    stats.thin_instances += part.stats.thin_instances;
+    stats.instances_occluded += part.stats.instances_occluded;
+  }
 };
 
 struct ParametricInstanceMeshes::Impl {
@@ -397,19 +446,19 @@ struct ParametricInstanceMeshes::Impl {
     }
   }
   GLuint program = 0, vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
-  UnitMeshBuilder builder;
-  std::unordered_map<uint32_t, UnitMesh> unit_meshes;
-  // Per-frame batches.
-  std::vector<SmoothVertex> vertices;
-  std::vector<glm::vec2> kept, ring;  // lathe scratch
-  ProfileSimplifier simplifier;
+  // Unit meshes by (shape, a, b), published once made (unitMesh); `made` owns them.
+  static constexpr size_t kUnitSlots = size_t(Shape::None) * kLevels.size() * kLevels.size();
+  std::array<std::atomic<const OwnedUnitMesh*>, kUnitSlots> unit_slots{};
+  std::mutex unit_mutex;
+  std::vector<std::unique_ptr<OwnedUnitMesh>> made;
+  // The frame's batch (parts appended in order), and the parts expanded beside it.
+  ExpandedPart frame;
+  std::vector<ExpandedPart> parts;
   // Occlusion: per instance, hidden by last frame's final depth; this frame's first-pass
   // instances left for the second pass, and every instance drawn (cluster, instance).
   std::vector<uint8_t> hidden_last;
   std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
-  // Second pass: the instances left to test against the pyramid; and which of the instances
-  // last tested (testAll) it hides.
-  std::vector<std::pair<uint32_t, uint32_t>> to_test;
+  // Which of the instances last tested (testAll) the pyramid hides.
   std::vector<uint8_t> test_hidden;
 
   // Tests every (cluster, instance) of `list` with `box_hidden`, eye at `eye_at`, into
@@ -431,8 +480,8 @@ struct ParametricInstanceMeshes::Impl {
                       });
   }
   glm::dvec3 eye{0.0};  // of the frame's passes
-  std::array<std::vector<uint32_t>, kBatchCount> indices;
   std::vector<uint32_t> all_indices;
+  uint32_t clusters_per_run = 32;  // 0: one run
 
   ~Impl() {
     glDeleteProgram(program);
@@ -441,9 +490,15 @@ struct ParametricInstanceMeshes::Impl {
     glDeleteVertexArrays(1, &vertex_array);
   }
 
-  const UnitMesh& unitMesh(Shape shape, uint32_t a, uint32_t b) {
-    const uint32_t key = meshKey(shape, a, b);
-    if (auto it = unit_meshes.find(key); it != unit_meshes.end()) return it->second;
+  // Safe to call from several threads at once: a mesh is made once, under the mutex, and read
+  // without it once published.
+  const OwnedUnitMesh& unitMesh(Shape shape, uint32_t a, uint32_t b) {
+    std::atomic<const OwnedUnitMesh*>& slot =
+        unit_slots[(size_t(shape) * kLevels.size() + a) * kLevels.size() + b];
+    if (const OwnedUnitMesh* mesh = slot.load(std::memory_order_acquire)) return *mesh;
+    std::lock_guard lock(unit_mutex);
+    if (const OwnedUnitMesh* mesh = slot.load(std::memory_order_relaxed)) return *mesh;
+    UnitMeshBuilder builder;
     UnitMesh m;
     switch (shape) {
       case Shape::Tube: m = builder.tube(kLevels[a]); break;
@@ -457,14 +512,23 @@ struct ParametricInstanceMeshes::Impl {
       case Shape::None: break;  // never expanded from a unit mesh
     }
     m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
-    return unit_meshes.emplace(key, m).first->second;
+    auto owned = std::make_unique<OwnedUnitMesh>();
+    owned->mesh = m;
+    owned->shapes = std::move(builder.shapes);
+    owned->indices = std::move(builder.indices);
+    made.push_back(std::move(owned));
+    slot.store(made.back().get(), std::memory_order_release);
+    return *made.back();
   }
 
   // Appends revolution `i` swept over `segments` steps (a full turn's count; a partial sweep gets
   // its share, at least one), its profile simplified to `profile_tolerance` metres: flat bands
   // between the kept profile points, two-sided (no normals: faceted like the reference).
-  void lathe(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, uint32_t segments,
-             float profile_tolerance) {
+  void lathe(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
+             uint32_t segments, float profile_tolerance) {
+    std::vector<SmoothVertex>& vertices = part.vertices;
+    std::vector<glm::vec2>& kept = part.kept;
+    std::vector<glm::vec2>& ring = part.ring;
     const pkg::InstanceRecord& in = view->instances()[i];
     const auto all_points = view->profilePoints();
     if (in.profile_count < 2 || in.profile_first > all_points.size() ||
@@ -474,7 +538,7 @@ struct ParametricInstanceMeshes::Impl {
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
     const float scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
-    simplifier.simplify(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
+    part.simplifier.simplify(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
     const float sweep = in.params[0];
     const bool full = !(sweep < float(kTwoPi) * (1.0f - 1e-5f));
     const uint32_t steps =
@@ -487,7 +551,7 @@ struct ParametricInstanceMeshes::Impl {
       ring[c] = {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a))};
     }
     const glm::vec3 origin = anchor_eye + b.origin;
-    std::vector<uint32_t>& out = indices[kTwoSided];
+    std::vector<uint32_t>& out = part.indices[kTwoSided];
     uint32_t previous_first = 0;
     bool previous_on_axis = false;
     for (size_t j = 0; j < kept.size(); ++j) {
@@ -520,7 +584,9 @@ struct ParametricInstanceMeshes::Impl {
   // cross-section seen from there, shaded with the normal of the tube's line nearest the eye.
   // Its two triangles cover the pixel centres the full-resolution tube would, where a one-pixel
   // line covered a whole pixel row along a tube a fifth of a pixel thick.
-  void ribbon(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, uint32_t segments) {
+  void ribbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
+              uint32_t segments) {
+    std::vector<SmoothVertex>& vertices = part.vertices;
     const pkg::InstanceRecord& in = view->instances()[i];
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
@@ -566,7 +632,7 @@ struct ParametricInstanceMeshes::Impl {
       section({0.0f, 0.0f, height}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
               cone ? p[1] : p[0]);
     }
-    std::vector<uint32_t>& out = indices[kTwoSided];
+    std::vector<uint32_t>& out = part.indices[kTwoSided];
     for (uint32_t k = 0; k < steps; ++k) {
       const uint32_t a = base + 2 * k;
       out.insert(out.end(), {a, a + 1, a + 3, a, a + 3, a + 2});
@@ -574,9 +640,12 @@ struct ParametricInstanceMeshes::Impl {
   }
 
   // Appends instance `i` in form `f` to its batch, positions relative to the eye.
-  void expand(uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye, const Form& f) {
+  void expand(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
+              const Form& f) {
+    std::vector<SmoothVertex>& vertices = part.vertices;
     const pkg::InstanceRecord& in = view->instances()[i];
-    const UnitMesh& mesh = unitMesh(f.shape, f.a, f.b);
+    const OwnedUnitMesh& owned = unitMesh(f.shape, f.a, f.b);
+    const UnitMesh& mesh = owned.mesh;
     const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                            in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
     const uint32_t base = static_cast<uint32_t>(vertices.size());
@@ -588,13 +657,13 @@ struct ParametricInstanceMeshes::Impl {
       const glm::mat3 half_axes(linear[0] * half.x, linear[1] * half.y, linear[2] * half.z);
       for (uint32_t v = 0; v < vertex_count; ++v)
         vertices.push_back(
-            {centre + half_axes * glm::vec3(builder.shapes[mesh.base_vertex + v]), in.object, 0u});
+            {centre + half_axes * glm::vec3(owned.shapes[mesh.base_vertex + v]), in.object, 0u});
     } else {
       const glm::vec3 origin = anchor_eye + b.origin;
       const auto type = static_cast<pkg::PrimitiveType>(in.type);
       const glm::mat3 normal_matrix = normalMatrix(linear);  // scale normalized away below
       for (uint32_t v = 0; v < vertex_count; ++v) {
-        const glm::vec4& q = builder.shapes[mesh.base_vertex + v];
+        const glm::vec4& q = owned.shapes[mesh.base_vertex + v];
         const glm::vec3 n = normal_matrix * shapedNormal(type, f.shape, in.params, q);
         const float length = glm::length(n);
         vertices.push_back({origin + linear * shapedPoint(type, in.params, q), in.object,
@@ -602,8 +671,8 @@ struct ParametricInstanceMeshes::Impl {
       }
     }
     const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
-    std::vector<uint32_t>& out = indices[f.batch];
-    const uint32_t* unit = builder.indices.data() + mesh.first_index;
+    std::vector<uint32_t>& out = part.indices[f.batch];
+    const uint32_t* unit = owned.indices.data() + mesh.first_index;
     if (f.batch == kTwoSided || f.batch == kPoints) {
       for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit[k]);
       return;
@@ -641,10 +710,12 @@ uint32_t ParametricInstanceMeshes::roundedSegments(uint32_t segments) {
 
 bool ParametricInstanceMeshes::handles(uint32_t type) { return type < kTypes; }
 
-ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view)
+ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
+                                                   uint32_t clusters_per_run)
     : impl_(std::make_unique<Impl>()) {
   Impl& s = *impl_;
   s.view = &view;
+  s.clusters_per_run = clusters_per_run;
   const auto instances = view.instances();
   if (view.header().flags & pkg::kHeaderSealedRunsMarked) {
     // The preprocessor searched: the roles are the instances' flags.
@@ -716,8 +787,6 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
                                                    const InstanceLodView& view,
                                                    std::vector<ParametricMeshInstance>& profiles) {
   Impl& s = *impl_;
-  InstanceLodStats stats;
-  profiles.clear();
   const auto records = s.view->clusters();
   // The frustum's side planes, eye-relative (rows of the projection: w +- x, w +- y), each
   // scaled to a unit normal so a sphere's radius compares directly.
@@ -735,8 +804,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       nearPlaneReach(near_m, 1.0 / std::max(double(glm::length(glm::vec3(row_x))), 1e-6),
                      1.0 / std::max(double(glm::length(glm::vec3(row_y))), 1e-6)));
 
-  s.vertices.clear();
-  for (auto& list : s.indices) list.clear();
+  s.frame.clear();
   if (view.pass == InstancePass::First) {
     s.deferred.clear();
     s.drawn.clear();
@@ -765,8 +833,10 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
   auto distanceOf = [&](const InstanceBounds& b, const glm::vec3& centre) {
     return std::max(double(glm::length(centre)) - b.radius, near_m);
   };
-  // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye).
-  auto place = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+  // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye) into
+  // `part`. Called from several threads at once, each with its own part.
+  auto place = [&](ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = s.bounds[i];
     const double distance = distanceOf(b, anchor_eye + b.centre);
     const double px_per_m = pixel_scale / distance;
@@ -782,29 +852,30 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       ++stats.instances_culled;
       return;
     }
-    if (view.pass != InstancePass::All) s.drawn.push_back({c, i});
+    if (view.pass != InstancePass::All) part.drawn.push_back({c, i});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
       FaceCull cull = FaceCull::None;
       if ((b.flags & kClosedProfile) && eyeOutsideSolid(b, -anchor_eye, near_reach))
         cull = (b.flags & kMirrored) ? FaceCull::BackOfCw : FaceCull::BackOfCcw;
-      profiles.push_back({c, i, distance, cull});
+      part.profiles.push_back({c, i, distance, cull});
       return;
     }
     stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
     if (form.shape == Shape::Ribbon) {
-      s.ribbon(i, b, anchor_eye, kLevels[form.a]);
+      s.ribbon(part, i, b, anchor_eye, kLevels[form.a]);
       return;
     }
     if (form.shape == Shape::Lathe) {
-      s.lathe(i, b, anchor_eye, kLevels[form.a],
+      s.lathe(part, i, b, anchor_eye, kLevels[form.a],
               0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
       return;
     }
-    s.expand(i, b, anchor_eye, form);
+    s.expand(part, i, b, anchor_eye, form);
   };
   // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
-  auto consider = [&](uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+  auto consider = [&](ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = s.bounds[i];
     if (!(b.flags & kValid)) return;
     const glm::vec3 centre = anchor_eye + b.centre;
@@ -817,63 +888,93 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       return;
     }
     if (view.pass == InstancePass::First && s.hidden_last[i]) {
-      s.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
+      part.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
       return;
     }
     if (test) {
-      s.to_test.push_back({c, i});
+      part.to_test.push_back({c, i});
       return;
     }
-    place(c, anchor_eye, i);
+    place(part, c, anchor_eye, i);
   };
-  s.to_test.clear();
-  for (uint32_t c : clusters) {
-    if (c >= records.size() || records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
-      continue;
-    const pkg::ClusterRecord& record = records[c];
-    if (record.instance_first > s.bounds.size() || record.instance_count > s.bounds.size() - record.instance_first)
-      continue;
-    const glm::vec3 anchor_eye(clusterAnchor(record) - view.eye);
-    for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
-      consider(c, anchor_eye, i);
+  // The clusters in runs, one part each, expanded on TBB (the GL thread waits for this batch);
+  // a run's part is its instances in cluster order, and the parts are appended in run order.
+  auto expandClusters = [&](ExpandedPart& part, size_t begin, size_t end) {
+    for (size_t k = begin; k < end; ++k) {
+      const uint32_t c = clusters[k];
+      if (c >= records.size() ||
+          records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+        continue;
+      const pkg::ClusterRecord& record = records[c];
+      if (record.instance_first > s.bounds.size() ||
+          record.instance_count > s.bounds.size() - record.instance_first)
+        continue;
+      const glm::vec3 anchor_eye(clusterAnchor(record) - view.eye);
+      for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
+        consider(part, c, anchor_eye, i);
+    }
+  };
+  const size_t runs =
+      s.clusters_per_run == 0
+          ? 1
+          : std::clamp<size_t>(clusters.size() / s.clusters_per_run, 1,
+                               size_t(tbb::this_task_arena::max_concurrency()) * 4);
+  if (runs == 1) {
+    expandClusters(s.frame, 0, clusters.size());
+  } else {
+    if (s.parts.size() < runs) s.parts.resize(runs);
+    tbb::parallel_for(size_t(0), runs, [&](size_t r) {
+      s.parts[r].clear();
+      expandClusters(s.parts[r], clusters.size() * r / runs, clusters.size() * (r + 1) / runs);
+    });
+    for (size_t r = 0; r < runs; ++r) s.frame.append(s.parts[r]);
   }
   if (view.pass == InstancePass::Second) {
-    for (const auto& [c, i] : s.deferred) consider(c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+    for (const auto& [c, i] : s.deferred)
+      consider(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
     s.deferred.clear();
   }
-  if (!s.to_test.empty()) {
-    s.testAll(s.to_test, view.eye, view.box_hidden);
+  std::vector<std::pair<uint32_t, uint32_t>> to_test;
+  to_test.swap(s.frame.to_test);
+  if (!to_test.empty()) {
+    s.testAll(to_test, view.eye, view.box_hidden);
     // Placed in the order considered, as without the test.
-    for (size_t k = 0; k < s.to_test.size(); ++k) {
-      const auto [c, i] = s.to_test[k];
+    for (size_t k = 0; k < to_test.size(); ++k) {
+      const auto [c, i] = to_test[k];
       if (s.test_hidden[k]) {
         s.hidden_last[i] = 1;
-        ++stats.instances_occluded;
+        ++s.frame.stats.instances_occluded;
       } else {
-        place(c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+        place(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
       }
     }
-    s.to_test.clear();
   }
-  stats.instances_drawn -= profiles.size();  // counted by whoever draws them
-  stats.unit_meshes = static_cast<uint32_t>(s.unit_meshes.size());
-  return stats;
+  s.drawn.insert(s.drawn.end(), s.frame.drawn.begin(), s.frame.drawn.end());
+  s.deferred.insert(s.deferred.end(), s.frame.deferred.begin(), s.frame.deferred.end());
+  profiles.assign(s.frame.profiles.begin(), s.frame.profiles.end());
+  InstanceLodStats result = s.frame.stats;
+  result.instances_drawn -= profiles.size();  // counted by whoever draws them
+  {
+    std::lock_guard lock(s.unit_mutex);
+    result.unit_meshes = static_cast<uint32_t>(s.made.size());
+  }
+  return result;
 }
-
 void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
                                       InstanceLodStats& stats) {
   Impl& s = *impl_;
-  if (s.vertices.empty()) return;
+  ExpandedPart& frame = s.frame;
+  if (frame.vertices.empty()) return;
   // One upload of every batch, then one draw per batch.
   s.all_indices.clear();
   std::array<size_t, kBatchCount + 1> first{};
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
     first[batch] = s.all_indices.size();
-    s.all_indices.insert(s.all_indices.end(), s.indices[batch].begin(), s.indices[batch].end());
+    s.all_indices.insert(s.all_indices.end(), frame.indices[batch].begin(), frame.indices[batch].end());
   }
   first[kBatchCount] = s.all_indices.size();
-  glNamedBufferData(s.vertex_buffer, GLsizeiptr(s.vertices.size() * sizeof(SmoothVertex)),
-                    s.vertices.data(), GL_STREAM_DRAW);
+  glNamedBufferData(s.vertex_buffer, GLsizeiptr(frame.vertices.size() * sizeof(SmoothVertex)),
+                    frame.vertices.data(), GL_STREAM_DRAW);
   glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
                     s.all_indices.data(), GL_STREAM_DRAW);
   glUseProgram(s.program);
@@ -903,8 +1004,8 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
   glBindVertexArray(0);
   glUseProgram(0);
   // Drawn once: a second submit without a prepare draws nothing.
-  s.vertices.clear();
-  for (auto& list : s.indices) list.clear();
+  frame.vertices.clear();
+  for (auto& list : frame.indices) list.clear();
 }
 
 }  // namespace tw

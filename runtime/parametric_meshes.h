@@ -32,6 +32,9 @@ struct ParametricMeshOptions {
   uint64_t budget_bytes = 256ull << 20;  // GL buffers of cached meshes
   double build_ms_per_frame = 30.0;   // CPU time for new meshes per frame, see above
   double fixed_tolerance_m = 0.0;     // > 0: every cluster at this tolerance (tests, references)
+  // Tessellated mode: the frame's clusters are expanded in runs of this many, on TBB
+  // (ParametricInstanceMeshes::prepare); 0: all in one run, on the calling thread.
+  uint32_t clusters_per_run = 32;
 };
 
 // One vertex of a tessellated cluster: 20 bytes. The normal is the surface's own (the

@@ -170,7 +170,9 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
   s.fixed_tolerance = mesh_options.fixed_tolerance_m > 0.0;
   // A reference draws every instance from its cluster's mesh at the one tolerance: it never
   // chooses per instance, so it neither prepares the bounds nor searches for sealed runs.
-  if (!s.fixed_tolerance) s.instance_meshes = std::make_unique<ParametricInstanceMeshes>(view);
+  if (!s.fixed_tolerance)
+    s.instance_meshes =
+        std::make_unique<ParametricInstanceMeshes>(view, mesh_options.clusters_per_run);
   glCreateBuffers(1, &s.draw_buffer);
   glCreateBuffers(1, &s.indirect_buffer);
   glCreateVertexArrays(1, &s.vertex_array);  // the proxies come from gl_VertexID: no attributes

@@ -2,8 +2,8 @@
 // distance asks for (parametric_instance_meshes.h), against impostors and fine meshes: coverage,
 // resolution by distance, thin things as ribbons and boxes, coarse pipes' width and shading, back faces culled
 // only where hidden (closed solids from outside, sealed pipe runs, closed extrusions), far
-// extrusions as boxes, instance-by-instance occlusion, and the first pass prepared on another
-// thread.
+// extrusions as boxes, instance-by-instance occlusion, the first pass prepared on another
+// thread, and the clusters expanded in runs on TBB.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -697,6 +697,44 @@ TEST_F(ParametricRendering, PreparedOnAnotherThreadDrawsTheSameAsADraw) {
   EXPECT_EQ(prepared_stats.instances_drawn, plain_stats.instances_drawn);
   EXPECT_EQ(prepared_stats.mesh_triangles, plain_stats.mesh_triangles);
   EXPECT_EQ(dropped_stats.mesh_triangles, plain_stats.mesh_triangles);
+}
+
+// prepare() expands the frame's clusters in runs on TBB, each into a part of its own, and
+// appends the parts in order: the frame must be the one a single run draws, pixel for pixel and
+// count for count, with occlusion's two passes too. Every form is there: closed and open
+// surfaces, boxes, profiles, lathes, ribbons and points.
+TEST_F(ParametricRendering, ExpandedInRunsDrawsWhatOneRunDraws) {
+  std::vector<Part> parts;
+  uint32_t id = 1;
+  for (const TypeCase& c : typeCases()) {
+    Part p{id, c.primitive, c.transform};
+    p.transform.origin += glm::dvec3(2.6 * (id - 1), 0.0, 0.0);
+    parts.push_back(p);
+    ++id;
+  }
+  // Far thin pipes and small spheres behind them: ribbons and points.
+  for (int k = 0; k < 40; ++k) {
+    parts.push_back({id++, Cylinder{0.06f, 3.0f, false}, placed({-4.0 + 0.5 * k, 30.0, 0.0}, {90, 0, 0})});
+    parts.push_back({id++, Sphere{0.08f}, placed({-4.0 + 0.5 * k, 45.0, 1.0})});
+  }
+  const fs::path pkg = buildPackage("expanded_in_runs", parts, false);
+  const Camera camera = lookingAt({6.5, -9.0, 3.0}, {6.5, 0.0, 0.5});
+  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
+    SCOPED_TRACE(occlusionModeName(occlusion));
+    const Frame one = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr, false,
+                             0.25, 0.0, 0);
+    const Frame runs = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr, false,
+                              0.25, 0.0, 1);
+    EXPECT_GE(one.stats.parametric_clusters_drawn, 4u);  // so there are several runs
+    if (occlusion == OcclusionMode::Off) {
+      EXPECT_GT(one.stats.parametric_thin_instances, 20u);
+    }
+    EXPECT_EQ(runs.stats.parametric_instances_drawn, one.stats.parametric_instances_drawn);
+    EXPECT_EQ(runs.stats.parametric_triangles, one.stats.parametric_triangles);
+    EXPECT_EQ(runs.stats.parametric_thin_instances, one.stats.parametric_thin_instances);
+    EXPECT_EQ(runs.ids, one.ids);
+    EXPECT_EQ(runs.rgba, one.rgba);
+  }
 }
 
 }  // namespace
