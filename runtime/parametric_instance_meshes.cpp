@@ -216,6 +216,7 @@ struct Form {
   bool capped = false;
   bool box_frame = false;  // shape points span the canonical box (not the primitive's formula)
   Batch batch = kTwoSided;
+  uint8_t long_axis = 0;   // a box-framed ribbon: the canonical box axis it runs along
 };
 
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; a tube
@@ -277,14 +278,14 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       }
       f.shape = thin_axes == 3 ? Shape::Point : surfaceOf(b.type);
       if (thin_axes == 2) {
-        // A box a pixel thin is still the cheapest exact silhouette: its 12 triangles sample the
-        // pixels the full-resolution surface would.
+        // A beam thinner than a pixel both ways across: a ribbon along its longest axis, as
+        // wide as its cross-section seen from the eye (beamRibbon), the silhouette its box
+        // would show, in two triangles instead of six to twelve.
         for (int axis = 0; axis < 3; ++axis)
           if (axis != longest) across = std::max(across, 2.0f * b.size[axis]);
-        if (f.shape != Shape::Box) {
-          f.shape = Shape::Box;
-          f.box_frame = true;
-        }
+        f.shape = Shape::Ribbon;
+        f.box_frame = true;
+        f.long_axis = static_cast<uint8_t>(longest);
       } else if (f.shape == Shape::Point) {
         across = 2.0f * b.size[longest];
       }
@@ -639,6 +640,69 @@ struct ParametricInstanceMeshes::Impl {
     }
   }
 
+  // Appends box-framed instance `i` (a box, or an extrusion or revolution by its box) thinner
+  // than a pixel across its two shorter axes as its silhouette: a band along the longest axis
+  // `axis` facing the eye, as wide as the box's cross-section seen from there, cut where the two
+  // long faces the eye sees meet, each part shaded with its face's normal. Four triangles show
+  // what the box's six to twelve would, but for its end faces.
+  void beamRibbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b,
+                  const glm::vec3& anchor_eye, int axis) {
+    const pkg::InstanceRecord& in = view->instances()[i];
+    glm::vec3 lo, hi;
+    if (!instanceLocalBox(in, view->profilePoints(), lo, hi)) return;
+    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
+                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+    const glm::vec3 half = 0.5f * (hi - lo);
+    const glm::vec3 axes[3] = {linear[0] * half.x, linear[1] * half.y, linear[2] * half.z};
+    const glm::vec3 along = axes[axis];
+    glm::vec3 u = axes[(axis + 1) % 3], w = axes[(axis + 2) % 3];
+    const float along_length = glm::length(along);
+    if (!(along_length > 0.0f)) return;
+    const glm::vec3 tangent = along / along_length;
+    const glm::vec3 centre = anchor_eye + b.centre;
+    // Outward unit normals of the long faces at +u and at +w (the axes need not be orthogonal);
+    // then u and w turned toward the eye, so the faces at +u and +w are the ones it sees.
+    auto outward = [](const glm::vec3& n, const glm::vec3& toward) {
+      const float length = glm::length(n);
+      if (!(length > 0.0f)) return glm::vec3(0.0f);
+      return (glm::dot(n, toward) < 0.0f ? -n : n) / length;
+    };
+    glm::vec3 n_u = outward(glm::cross(along, w), u), n_w = outward(glm::cross(along, u), w);
+    if (glm::dot(n_u, -centre) < 0.0f) {
+      u = -u;
+      n_u = -n_u;
+    }
+    if (glm::dot(n_w, -centre) < 0.0f) {
+      w = -w;
+      n_w = -n_w;
+    }
+    const uint32_t packed_u = packNormal(n_u), packed_w = packNormal(n_w);
+    std::vector<SmoothVertex>& vertices = part.vertices;
+    // One cross-section: across `side`, the face at +u spans the edges u - w and u + w, the face
+    // at +w the edges u + w and w - u; the outer edges are the silhouette.
+    auto section = [&](const glm::vec3& at) {
+      const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
+      glm::vec3 side = glm::cross(tangent, to_eye);
+      if (glm::length(side) < 1e-6f)  // seen along its axis: any side will do
+        side = glm::cross(tangent, std::abs(tangent.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+      side = glm::normalize(side);
+      const float shared = glm::dot(u + w, side);
+      const float u_outer = glm::dot(u - w, side), w_outer = glm::dot(w - u, side);
+      vertices.push_back({at + u_outer * side, in.object, packed_u});
+      vertices.push_back({at + shared * side, in.object, packed_u});
+      vertices.push_back({at + shared * side, in.object, packed_w});
+      vertices.push_back({at + w_outer * side, in.object, packed_w});
+    };
+    const auto base = static_cast<uint32_t>(vertices.size());
+    section(centre - along);
+    section(centre + along);
+    std::vector<uint32_t>& out = part.indices[kTwoSided];
+    for (uint32_t face = 0; face < 2; ++face) {
+      const uint32_t a = base + 2 * face, c = a + 4;  // this face's pair at each end
+      out.insert(out.end(), {a, a + 1, c + 1, a, c + 1, c});
+    }
+  }
+
   // Appends instance `i` in form `f` to its batch, positions relative to the eye.
   void expand(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
               const Form& f) {
@@ -863,7 +927,10 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     }
     stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
     if (form.shape == Shape::Ribbon) {
-      s.ribbon(part, i, b, anchor_eye, kLevels[form.a]);
+      if (form.box_frame)
+        s.beamRibbon(part, i, b, anchor_eye, form.long_axis);
+      else
+        s.ribbon(part, i, b, anchor_eye, kLevels[form.a]);
       return;
     }
     if (form.shape == Shape::Lathe) {

@@ -6,7 +6,7 @@
 // close-up resolution along its whole length, and a far handrail post costs as many triangles as
 // a near one. Here each visible instance picks its own segment counts: the chordal error of its
 // arcs projects to at most tolerance_px (the frame's tau). Thin tubes and elbows become ribbons,
-// two triangles per segment facing the eye, thin beams their box, things thin every way points
+// two triangles per segment facing the eye, thin beams ribbons too, things thin every way points
 // (InstanceLodView::thin_px); extrusions whose profile detail is below tolerance their box.
 // Instances outside the frustum's side planes or whose bounding sphere projects below
 // min_feature_px are dropped. Closed surfaces seen from outside the solid (not merely outside
@@ -63,8 +63,8 @@ struct InstanceLodView {
   // (two triangles a pipe; the coarsest tube mesh has six). It covers the pixel centres the true
   // surface covers, as the one-pixel lines drawn before did not (docs/parametrics.md, "Thin
   // things and the reference"). Boxes, extrusions and revolutions thin in two directions are
-  // drawn as their box (a beam's exact silhouette), spheres and anything thin in all three
-  // directions as points. Thinner than min_thin_px they are left out: many, each covering few
+  // ribbons along their longest axis, as wide as their box's cross-section seen from the eye;
+  // spheres and anything thin in all three directions are points. Thinner than min_thin_px they are left out: many, each covering few
   // pixels, for a small gain (measured there).
   double thin_px = 1.0;
   double min_thin_px = 0.4;

@@ -360,13 +360,15 @@ TEST_F(ParametricRendering, ThinThingsCoverThePixelsOfTheirTrueSurface) {
       {3, Cone{0.4f * px, 0.25f * px, 12.0f, true}, placed({-6, 60, -3.0}, {0, 85, 0})},
       {4, TorusSegment{10.0f, 0.35f * px, 2.0f}, placed({-4, 60, -14.0}, {90, 0, 0})},
       {5, Box{glm::vec3(8.0f, 0.3f * px, 0.3f * px)}, placed({0, 60, 7.0}, {0, -7, 0})},
+      // Rolled about its length: seen across its diagonal, wider than its side.
+      {6, Box{glm::vec3(7.0f, 0.3f * px, 0.2f * px)}, placed({1, 60, -8.0}, {45, 0, 6})},
   };
   const Frame thin = render(buildPackage("thin_true", parts, false), camera,
                             ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
   const Frame fine = render(buildPackage("thin_true_mesh", parts, true), camera,
                             ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
   EXPECT_EQ(thin.stats.parametric_instances_drawn, parts.size());
-  EXPECT_EQ(thin.stats.parametric_thin_instances, 4u);  // the box is a box
+  EXPECT_EQ(thin.stats.parametric_thin_instances, parts.size());  // the beam a ribbon too
   EXPECT_LT(thin.stats.parametric_triangles, 60u);
   for (const Part& part : parts) {
     SCOPED_TRACE(part.id);
