@@ -17,7 +17,6 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
