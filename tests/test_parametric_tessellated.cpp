@@ -26,9 +26,8 @@ namespace {
 
 using namespace parametric_test;
 
-// Tessellated mode (meshes by distance) covers what impostor mode covers, within a silhouette
-// band, for every type.
-TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
+// One part of each type case, ids from 1, in a row along x 2.6 m apart.
+std::vector<Part> typeCaseRow() {
   std::vector<Part> parts;
   uint32_t id = 1;
   for (const TypeCase& c : typeCases()) {
@@ -37,6 +36,13 @@ TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
     parts.push_back(p);
     ++id;
   }
+  return parts;
+}
+
+// Tessellated mode (meshes by distance) covers what impostor mode covers, within a silhouette
+// band, for every type.
+TEST_F(ParametricRendering, TessellatedModeCoversLikeImpostors) {
+  const std::vector<Part> parts = typeCaseRow();
   const fs::path pkg = buildPackage("all_types", parts, false);
   const Camera camera = lookingAt({6.5, -9.0, 3.0}, {6.5, 0.0, 0.5});
   const Frame impostor = render(pkg, camera, ParametricMode::Impostor);
@@ -706,14 +712,8 @@ TEST_F(ParametricRendering, PreparedOnAnotherThreadDrawsTheSameAsADraw) {
 // count for count, with occlusion's two passes too. Every form is there: closed and open
 // surfaces, boxes, profiles, lathes, ribbons and points.
 TEST_F(ParametricRendering, ExpandedInRunsDrawsWhatOneRunDraws) {
-  std::vector<Part> parts;
-  uint32_t id = 1;
-  for (const TypeCase& c : typeCases()) {
-    Part p{id, c.primitive, c.transform};
-    p.transform.origin += glm::dvec3(2.6 * (id - 1), 0.0, 0.0);
-    parts.push_back(p);
-    ++id;
-  }
+  std::vector<Part> parts = typeCaseRow();
+  auto id = static_cast<uint32_t>(parts.size() + 1);
   // Far thin pipes and small spheres behind them: ribbons and points.
   for (int k = 0; k < 40; ++k) {
     parts.push_back({id++, Cylinder{0.06f, 3.0f, false}, placed({-4.0 + 0.5 * k, 30.0, 0.0}, {90, 0, 0})});
