@@ -725,8 +725,8 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       consider(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
     s.deferred.clear();
   }
-  std::vector<std::pair<uint32_t, uint32_t>> to_test;
-  to_test.swap(s.frame.to_test);
+  // Read in place: place() adds to the part's batch and lists, never to to_test.
+  const std::vector<std::pair<uint32_t, uint32_t>>& to_test = s.frame.to_test;
   if (!to_test.empty()) {
     s.testAll(to_test, view.eye, view.box_hidden);
     // Placed in the order considered, as without the test.
@@ -739,6 +739,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
         place(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
       }
     }
+    s.frame.to_test.clear();
   }
   s.drawn.insert(s.drawn.end(), s.frame.drawn.begin(), s.frame.drawn.end());
   s.deferred.insert(s.deferred.end(), s.frame.deferred.begin(), s.frame.deferred.end());
