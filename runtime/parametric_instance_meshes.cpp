@@ -176,6 +176,7 @@ struct ParametricInstanceMeshes::Impl {
   std::array<std::atomic<const OwnedUnitMesh*>, kUnitSlots> unit_slots{};
   std::mutex unit_mutex;
   std::vector<std::unique_ptr<OwnedUnitMesh>> made;
+  std::atomic<uint32_t> made_count{0};  // made.size(), for the stats without the mutex
   // The frame's batch (parts appended in order), and the parts expanded beside it.
   ExpandedPart frame;
   std::vector<ExpandedPart> parts;
@@ -242,6 +243,7 @@ struct ParametricInstanceMeshes::Impl {
     owned->shapes = std::move(builder.shapes);
     owned->indices = std::move(builder.indices);
     made.push_back(std::move(owned));
+    made_count.store(static_cast<uint32_t>(made.size()), std::memory_order_relaxed);
     slot.store(made.back().get(), std::memory_order_release);
     return *made.back();
   }
@@ -746,10 +748,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
   profiles.assign(s.frame.profiles.begin(), s.frame.profiles.end());
   InstanceLodStats result = s.frame.stats;
   result.instances_drawn -= profiles.size();  // counted by whoever draws them
-  {
-    std::lock_guard lock(s.unit_mutex);
-    result.unit_meshes = static_cast<uint32_t>(s.made.size());
-  }
+  result.unit_meshes = s.made_count.load(std::memory_order_relaxed);
   return result;
 }
 void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
