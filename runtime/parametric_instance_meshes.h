@@ -91,9 +91,12 @@ class ParametricInstanceMeshes {
   static uint32_t roundedSegments(uint32_t segments);
 
   // Reads the instance table's bounds once (about 40 bytes per instance). prepare() expands the
-  // frame's clusters in runs of clusters_per_run on TBB (0: one run, on the calling thread); the
-  // batch is the same either way. Throws std::runtime_error when GL set-up fails.
-  explicit ParametricInstanceMeshes(const PackageView& view, uint32_t clusters_per_run = 32);
+  // frame's clusters in runs of options.clusters_per_run on TBB (0: one run, on the calling
+  // thread); submit() draws the batch in flushed parts of options.primitives_per_flush (0: whole).
+  // The image is the same either way. Only those two options are read. Throws
+  // std::runtime_error when GL set-up fails.
+  explicit ParametricInstanceMeshes(const PackageView& view,
+                                    const ParametricMeshOptions& options = {});
   ~ParametricInstanceMeshes();
   ParametricInstanceMeshes(const ParametricInstanceMeshes&) = delete;
   ParametricInstanceMeshes& operator=(const ParametricInstanceMeshes&) = delete;
@@ -122,7 +125,9 @@ class ParametricInstanceMeshes {
   InstanceLodStats prepare(std::span<const uint32_t> clusters, const InstanceLodView& view,
                            std::vector<ParametricMeshInstance>& profiles);
   // The GL half: uploads the prepared batch and draws it, adding its draw calls and triangles
-  // to `stats`. A batch is drawn once.
+  // to `stats`. A batch is drawn once, in parts each followed by a glFlush: llvmpipe's
+  // rasterizer threads start on a scene only when it is flushed, and until then the submitting
+  // thread shades and bins every vertex of the batch alone (docs/runtime.md, "Overlap").
   void submit(const glm::mat4& view_projection, uint32_t object_color_count, InstanceLodStats& stats);
 
   // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)

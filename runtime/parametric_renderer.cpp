@@ -172,7 +172,7 @@ ParametricRenderer::ParametricRenderer(const PackageView& view, GlRenderer& rend
   // chooses per instance, so it neither prepares the bounds nor searches for sealed runs.
   if (!s.fixed_tolerance)
     s.instance_meshes =
-        std::make_unique<ParametricInstanceMeshes>(view, mesh_options.clusters_per_run);
+        std::make_unique<ParametricInstanceMeshes>(view, mesh_options);
   glCreateBuffers(1, &s.draw_buffer);
   glCreateBuffers(1, &s.indirect_buffer);
   glCreateVertexArrays(1, &s.vertex_array);  // the proxies come from gl_VertexID: no attributes

@@ -739,5 +739,40 @@ TEST_F(ParametricRendering, ExpandedInRunsDrawsWhatOneRunDraws) {
   }
 }
 
+TEST_F(ParametricRendering, DrawnInFlushedPartsDrawsWhatOneDrawDraws) {
+  // A far view's batch, drawn in parts (fewer than four primitives an instance): rows of thin
+  // pipes and small spheres (ribbons and points), and capped tubes seen from outside (the
+  // back-face culled batch).
+  std::vector<Part> parts;
+  uint32_t id = 1;
+  for (int row = 0; row < 10; ++row) {
+    for (int k = 0; k < 30; ++k) {
+      parts.push_back({id++, Cylinder{0.06f, 3.0f, false},
+                       placed({-4.0 + 0.5 * k, 30.0 + 2.0 * row, 0.0}, {90, 0, 0})});
+      parts.push_back({id++, Sphere{0.08f}, placed({-4.0 + 0.5 * k, 55.0 + 2.0 * row, 1.0})});
+    }
+  }
+  for (int k = 0; k < 10; ++k)
+    parts.push_back({id++, Cylinder{0.3f, 1.0f, true}, placed({-2.0 + 1.5 * k, 15.0, -1.0})});
+  const fs::path pkg = buildPackage("flushed_parts", parts, false);
+  const Camera camera = lookingAt({6.5, -9.0, 3.0}, {6.5, 0.0, 0.5});
+  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
+    SCOPED_TRACE(occlusionModeName(occlusion));
+    const Frame whole = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr, false,
+                               0.25, 0.0, 32, 0);
+    // Seven primitives a part: parts end inside every batch, points included.
+    const Frame in_parts = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr,
+                                  false, 0.25, 0.0, 32, 7);
+    EXPECT_GT(whole.stats.parametric_triangles, 7u * 10u);
+    if (occlusion == OcclusionMode::Off) {
+      EXPECT_GT(whole.stats.parametric_thin_instances, 200u);
+    }
+    EXPECT_EQ(in_parts.stats.parametric_instances_drawn, whole.stats.parametric_instances_drawn);
+    EXPECT_EQ(in_parts.stats.parametric_triangles, whole.stats.parametric_triangles);
+    EXPECT_EQ(in_parts.ids, whole.ids);
+    EXPECT_EQ(in_parts.rgba, whole.rgba);
+  }
+}
+
 }  // namespace
 }  // namespace tw
