@@ -760,7 +760,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
   Impl& s = *impl_;
   ExpandedPart& frame = s.frame;
   if (frame.vertices.empty()) return;
-  // One upload of every batch, then one draw per batch.
+  // One upload of every batch, then each batch drawn whole or in flushed parts.
   s.all_indices.clear();
   std::array<size_t, kBatchCount + 1> first{};
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
@@ -771,7 +771,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
   // Parts pay where the batch is many small primitives, as a far view's ribbons and points: there
   // llvmpipe's binning is the work to overlap. A batch of near instances (four or more
   // primitives each on average) goes whole: every extra scene then reloads and stores the many
-  // tiles its large triangles cover, which cost the walked decks as much as the overlap gained.
+  // tiles its large triangles cover, and on the walked decks parts were 5 % slower.
   const size_t primitives = frame.indices[kPoints].size() +
                             (s.all_indices.size() - frame.indices[kPoints].size()) / 3;
   const bool in_parts =
@@ -796,9 +796,9 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       glDisable(GL_CULL_FACE);
     }
     const GLenum mode = batch == kPoints ? GL_POINTS : GL_TRIANGLES;
-    // In flushed parts, so the rasterizer threads draw the first while this thread bins the
-    // next: on the 50M plant's orbit (121,000 triangles a frame) the frame fell from about 47
-    // to 39 ms (docs/benchmarks.md).
+    // In flushed parts (see in_parts), so the rasterizer threads draw one while this thread
+    // bins the next: the 50M plant's orbit (121,516 triangles a frame) fell from 47.6 to 39.5 ms
+    // (docs/benchmarks.md, "A far view's parametric batch in flushed parts").
     const size_t vertices_per_primitive = mode == GL_TRIANGLES ? 3 : 1;
     const size_t part =
         in_parts ? size_t(s.primitives_per_flush) * vertices_per_primitive : count;
