@@ -125,9 +125,10 @@ class ParametricInstanceMeshes {
   InstanceLodStats prepare(std::span<const uint32_t> clusters, const InstanceLodView& view,
                            std::vector<ParametricMeshInstance>& profiles);
   // The GL half: uploads the prepared batch and draws it, adding its draw calls and triangles
-  // to `stats`. A batch is drawn once, in parts each followed by a glFlush: llvmpipe's
-  // rasterizer threads start on a scene only when it is flushed, and until then the submitting
-  // thread shades and bins every vertex of the batch alone (docs/runtime.md, "Overlap").
+  // to `stats`. A batch is drawn once. A far view's (fewer than four primitives an instance) is
+  // drawn in parts, each followed by a glFlush: llvmpipe's rasterizer threads start on a scene
+  // only when it is flushed, and until then the submitting thread shades and bins every vertex
+  // of the batch alone (docs/runtime.md, "Overlap"). A near view's is drawn whole.
   void submit(const glm::mat4& view_projection, uint32_t object_color_count, InstanceLodStats& stats);
 
   // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)

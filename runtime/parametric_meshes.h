@@ -35,8 +35,9 @@ struct ParametricMeshOptions {
   // Tessellated mode: the frame's clusters are expanded in runs of this many, on TBB
   // (ParametricInstanceMeshes::prepare); 0: all in one run, on the calling thread.
   uint32_t clusters_per_run = 32;
-  // Tessellated mode: the frame's batch is drawn in parts of at most this many triangles or
-  // points, each flushed (ParametricInstanceMeshes::submit); 0: one draw a batch, no flush.
+  // Tessellated mode: a far view's batch (fewer than four primitives an instance) is drawn in
+  // parts of at most this many triangles or points, each flushed
+  // (ParametricInstanceMeshes::submit); 0: one draw a batch, no flush.
   uint32_t primitives_per_flush = 8192;
 };
 

@@ -764,6 +764,9 @@ TEST_F(ParametricRendering, DrawnInFlushedPartsDrawsWhatOneDrawDraws) {
     const Frame in_parts = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr,
                                   false, 0.25, 0.0, 32, 7);
     EXPECT_GT(whole.stats.parametric_triangles, 7u * 10u);
+    // Fewer than four primitives an instance (at most one point each), so the batch goes in parts.
+    EXPECT_LT(whole.stats.parametric_triangles + whole.stats.parametric_instances_drawn,
+              4u * whole.stats.parametric_instances_drawn);
     if (occlusion == OcclusionMode::Off) {
       EXPECT_GT(whole.stats.parametric_thin_instances, 200u);
     }
