@@ -190,6 +190,9 @@ class OcclusionCuller {
 
   // True while resting (HzbOptions::rest_after_frames): this frame draws the whole cut in pass 1.
   bool resting() const { return resting_left_ > 0; }
+  // True once this frame has built a pyramid (cullRest, or recordVisible outside a rest): only
+  // then can boxHidden hide anything.
+  bool pyramidCurrent() const { return pyramid_current_; }
 
   // The pyramid of the last build (after cullRest: the occlusion depth's; after recordVisible:
   // the final depth's). For tests and debugging.

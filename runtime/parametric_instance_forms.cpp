@@ -126,11 +126,9 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   return b;
 }
 
-Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin,
-                bool eye_outside, bool inside_hidden) {
+Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin) {
   Form f;
   f.capped = (b.flags & kCapped) != 0;
-  bool closed = true;
   float across = 0.0f;  // thin forms: the width the ribbon, box or point stands for
   // Cross-section rings (tubes, tori, spheres) at half the tolerance: a ring's error shows on
   // both sides of a pipe, so its width is what tau bounds (docs/parametrics.md, "Rings").
@@ -144,7 +142,6 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       }
       f.shape = Shape::Tube;
       f.a = levelIndex(arcSegments(b.size[0], float(kTwoPi), ring_tolerance));
-      closed = f.capped || inside_hidden;
       break;
     case Shape::Sphere:
       if (2.0f * b.size[0] < thin) {
@@ -168,7 +165,6 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       }
       f.shape = Shape::Torus;
       f.b = levelIndex(arcSegments(b.size[1], float(kTwoPi), ring_tolerance));
-      closed = inside_hidden || b.size[2] >= float(kTwoPi);  // a full torus has no open ends
       break;
     }
     default: {  // box and profiles: thin in two directions, the box; in all three, a point
@@ -208,13 +204,18 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
   if (across > 0.0f && across < min_thin) f.shape = Shape::None;
   if (f.shape == Shape::Point) f.box_frame = true;
   if (f.shape != Shape::Tube) f.capped = false;
-  if (f.shape == Shape::Point)
-    f.batch = kPoints;
-  else if (f.shape == Shape::Ribbon)
-    f.batch = kTwoSided;  // it faces the eye
-  else if (closed && (eye_outside || inside_hidden))  // back faces hidden by the front faces
-    f.batch = (b.flags & kMirrored) ? kCullCw : kCullCcw;
+  if (f.shape == Shape::Point) f.batch = kPoints;  // a ribbon faces the eye: two-sided
   return f;
+}
+
+void cullBackFaces(Form& f, const InstanceBounds& b, bool eye_outside, bool inside_hidden) {
+  if (f.shape == Shape::Point || f.shape == Shape::Ribbon || f.shape == Shape::None) return;
+  bool closed = true;
+  if (f.shape == Shape::Tube) closed = f.capped || inside_hidden;
+  if (f.shape == Shape::Torus)
+    closed = inside_hidden || b.size[2] >= float(kTwoPi);  // a full torus has no open ends
+  if (closed && (eye_outside || inside_hidden))  // back faces hidden by the front faces
+    f.batch = (b.flags & kMirrored) ? kCullCw : kCullCcw;
 }
 
 }  // namespace tw::instance_forms

@@ -108,11 +108,13 @@ struct Form {
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; a tube
 // or elbow thinner than `thin` metres across a ribbon, a box, extrusion or revolution thin in two
 // directions a ribbon along its longest axis, an instance thin in all three a point; any of these
-// thinner than `min_thin`, nothing.
-// `eye_outside`: the eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's
-// or elbow's inside cannot be seen (tubeInsideHidden, or a member of a sealed run with the eye
-// clear of every sealed run).
-Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin,
-                bool eye_outside, bool inside_hidden);
+// thinner than `min_thin`, nothing. Surfaces come two-sided: cullBackFaces decides.
+Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin);
+// Culls the back faces of surface form `f` where the front faces hide them. `eye_outside`: the
+// eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's or elbow's inside
+// cannot be seen (tubeInsideHidden, or a member of a sealed run with the eye clear of every
+// sealed run). Points and ribbons are left as they are: the caller need not ask those questions
+// of the far view's many thin instances.
+void cullBackFaces(Form& f, const InstanceBounds& b, bool eye_outside, bool inside_hidden);
 
 }  // namespace tw::instance_forms

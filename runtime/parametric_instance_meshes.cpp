@@ -634,17 +634,18 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     const double distance = distanceOf(b, anchor_eye + b.centre);
     const double px_per_m = pixel_scale / distance;
     const float metres_per_px = static_cast<float>(1.0 / px_per_m);
-    const Form form =
+    Form form =
         chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
                    static_cast<float>(view.thin_px) * metres_per_px,
-                   static_cast<float>(view.min_thin_px) * metres_per_px,
-                   eyeOutsideSolid(b, -anchor_eye, near_reach),
-                   ((b.flags & kRunMember) && s.eye_clear_of_runs) ||
-                       (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach)));
+                   static_cast<float>(view.min_thin_px) * metres_per_px);
     if (form.shape == Shape::None) {
       ++stats.instances_culled;
       return;
     }
+    if (form.shape != Shape::Point && form.shape != Shape::Ribbon)
+      cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, near_reach),
+                    ((b.flags & kRunMember) && s.eye_clear_of_runs) ||
+                        (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach)));
     if (view.pass != InstancePass::All) part.drawn.push_back({c, i});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
@@ -660,6 +661,13 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
         s.beamRibbon(part, i, b, anchor_eye, form.long_axis);
       else
         s.ribbon(part, i, b, anchor_eye, kLevels[form.a]);
+      return;
+    }
+    if (form.shape == Shape::Point) {
+      // The point unit mesh's one vertex is the box centre: placed without the mesh, the
+      // instance's box or its transform (a third of the 50M orbit's instances are points).
+      part.indices[kPoints].push_back(static_cast<uint32_t>(part.vertices.size()));
+      part.vertices.push_back({anchor_eye + b.centre, s.view->instances()[i].object, 0u});
       return;
     }
     if (form.shape == Shape::Lathe) {
