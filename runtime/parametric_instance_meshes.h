@@ -90,7 +90,7 @@ class ParametricInstanceMeshes {
   // Segment counts are rounded up to one of these (so a few dozen unit meshes serve a plant).
   static uint32_t roundedSegments(uint32_t segments);
 
-  // Reads the instance table's bounds once (about 40 bytes per instance). prepare() expands the
+  // Reads the instance table's bounds once (68 bytes per instance). prepare() expands the
   // frame's clusters in runs of options.clusters_per_run on TBB (0: one run, on the calling
   // thread); submit() draws the batch in flushed parts of options.primitives_per_flush (0: whole).
   // The image is the same either way. Only those two options are read. Throws
