@@ -202,7 +202,6 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
     }
   }
   if (across > 0.0f && across < min_thin) f.shape = Shape::None;
-  if (f.shape == Shape::Point) f.box_frame = true;
   if (f.shape != Shape::Tube) f.capped = false;
   if (f.shape == Shape::Point) f.batch = kPoints;  // a ribbon faces the eye: two-sided
   return f;

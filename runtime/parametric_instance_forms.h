@@ -31,7 +31,8 @@ static_assert(kLevels.back() == kMaxArcSegments);
 // The index in kLevels of the first count >= `segments` (the last when there is none).
 uint32_t levelIndex(uint32_t segments);
 
-// The unit meshes. Surfaces are triangles; instances thin in every direction degrade to a point.
+// The unit meshes. Surfaces are triangles; instances thin in every direction degrade to a point
+// (their box centre, placed without a unit mesh).
 // Ribbon: a tube or elbow thinner than a pixel, or a beam thinner than a pixel both ways across,
 // drawn as its silhouette (a band facing the eye along the axis, centre circle or longest box
 // axis, as wide as the instance seen from there), built each frame.

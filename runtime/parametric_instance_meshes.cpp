@@ -233,7 +233,7 @@ struct ParametricInstanceMeshes::Impl {
       case Shape::Sphere: m = builder.sphere(kLevels[a], kLevels[b]); break;
       case Shape::Torus: m = builder.torus(kLevels[a], kLevels[b]); break;
       case Shape::Box: m = builder.box(); break;
-      case Shape::Point: m = builder.point(); break;
+      case Shape::Point:  // the box centre, placed from the bounds (prepare)
       case Shape::Profile:
       case Shape::Lathe:
       case Shape::Ribbon:
@@ -664,9 +664,9 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       return;
     }
     if (form.shape == Shape::Point) {
-      // The point unit mesh's one vertex is the box centre: placed without the mesh, the
-      // instance's box or its transform (some 18,000 of the 50M orbit's 47,000 instances a frame
-      // are points).
+      // A point is its instance's box centre, which the bounds hold: placed without a unit mesh,
+      // the instance's box or its transform (some 18,000 of the 50M orbit's 47,000 instances a
+      // frame are points).
       part.indices[kPoints].push_back(static_cast<uint32_t>(part.vertices.size()));
       part.vertices.push_back({anchor_eye + b.centre, s.view->instances()[i].object, 0u});
       return;

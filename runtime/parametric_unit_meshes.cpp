@@ -86,14 +86,6 @@ UnitMesh UnitMeshBuilder::box() {
   return m;
 }
 
-UnitMesh UnitMeshBuilder::point() {
-  UnitMesh m = begin();
-  shapes.push_back(glm::vec4(0.0f));
-  indices.push_back(0);
-  m.side_indices = m.all_indices = count(m);
-  return m;
-}
-
 UnitMesh UnitMeshBuilder::begin() const {
   UnitMesh m;
   m.base_vertex = static_cast<uint32_t>(shapes.size());

@@ -50,9 +50,6 @@ class UnitMeshBuilder {
 
   UnitMesh box();
 
-  // The centre of the instance's canonical box (drawn in the box frame).
-  UnitMesh point();
-
  private:
   UnitMesh begin() const;
   uint32_t count(const UnitMesh& m) const { return static_cast<uint32_t>(indices.size()) - m.first_index; }
