@@ -215,6 +215,18 @@ void writePngRgba(const std::filesystem::path& path, int width, int height,
     throw std::runtime_error(path.string() + ": cannot write PNG");
 }
 
+IdCensus censusOf(std::span<const uint32_t> ids) {
+  std::vector<uint32_t> shown;
+  shown.reserve(ids.size());
+  for (uint32_t id : ids)
+    if (id != 0) shown.push_back(id);
+  IdCensus census;
+  census.covered_pixels = shown.size();
+  std::sort(shown.begin(), shown.end());
+  census.visible_objects = uint64_t(std::unique(shown.begin(), shown.end()) - shown.begin());
+  return census;
+}
+
 std::vector<uint32_t> idsFromRgba(std::span<const uint8_t> rgba) {
   if (rgba.size() % 4 != 0)
     throw std::invalid_argument("idsFromRgba: " + std::to_string(rgba.size()) +

@@ -53,6 +53,16 @@ ImageCompareResult compareImages(int width, int height, std::span<const uint8_t>
                                  std::span<const uint32_t> ids_b, const ImageCompareOptions& options,
                                  std::vector<uint8_t>* diff_rgba = nullptr);
 
+// What a frame shows, read off its id image (0 = background): the pixels some object covers and
+// how many distinct objects those are. A renderer whose cost follows its output should take
+// about as long for two views with the same census, however large the model behind them; the
+// bench reports the reference's census beside the frame times (docs/compare.md).
+struct IdCensus {
+  uint64_t covered_pixels = 0;
+  uint64_t visible_objects = 0;
+};
+IdCensus censusOf(std::span<const uint32_t> ids);
+
 // An 8-bit RGBA image: rows top to bottom, 4 bytes a pixel.
 struct RgbaImage {
   int width = 0, height = 0;

@@ -67,6 +67,9 @@ TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
         EXPECT_FALSE(m["series"]["frame_ms"].empty()) << path << " " << mode;
         if (std::string(mode) != "reference") {
           EXPECT_TRUE(m.contains("fidelity")) << mode;
+          // What the reference's frames show: some object on some pixel, on every path.
+          EXPECT_GT(m["fidelity"].value("median_covered_pixels_a", 0.0), 0.0) << path << " " << mode;
+          EXPECT_GT(m["fidelity"].value("median_visible_objects_a", 0.0), 0.0) << path << " " << mode;
         }
       }
       EXPECT_TRUE(model["paths"][path]["lod_frustum_occlusion"].contains("occlusion_lost_share"));
@@ -78,7 +81,8 @@ TEST(Bench, QuickRunWritesResultsReportPlotsAndSamples) {
   std::ifstream in(out / "report.md");
   const std::string report((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   for (const char* text : {"## Preprocessing", "LOD + frustum + occlusion", "full default",
-                           "## Path `decks`", "## Plots", "## Sample frames"})
+                           "## Path `decks`", "Shown per frame by the reference", "## Plots",
+                           "## Sample frames"})
     EXPECT_NE(report.find(text), std::string::npos) << text;
   for (const char* plot : {"frametime-decks.png", "scaling-decks.png", "preprocess.png",
                            "stages.png"})

@@ -308,6 +308,16 @@ TEST(ImagePng, DamagedPngsAreRejectedCleanly) {
   EXPECT_GE(rejected, int(original.size()));  // at least every truncation
 }
 
+TEST(IdCensus, CountsCoveredPixelsAndDistinctObjects) {
+  const std::vector<uint32_t> ids = {0, 7, 7, 0, 3, 9, 3, 0, 7, 0xffffffffu};
+  const IdCensus census = censusOf(ids);
+  EXPECT_EQ(census.covered_pixels, 7u);
+  EXPECT_EQ(census.visible_objects, 4u);  // 3, 7, 9 and the largest id
+  const IdCensus empty = censusOf(std::vector<uint32_t>(16, 0));
+  EXPECT_EQ(empty.covered_pixels, 0u);
+  EXPECT_EQ(empty.visible_objects, 0u);
+}
+
 // --- `terawalk compare` through the real executable ---
 
 using RunResult = test::CommandResult;
@@ -373,6 +383,13 @@ TEST_F(CompareCli, ReportsPerFrameFiguresAndWritesDiffsAndSummary) {
   EXPECT_NEAR(j["per_frame"][1]["id_mismatch_pct"].get<double>(), 100.0 * 40 / 1200, 1e-9);
   EXPECT_EQ(j["per_frame"][2]["match_pct"], 100.0);
   EXPECT_LT(j["per_frame"][2]["psnr_db"].get<double>(), 30.0);
+  // What each frame shows: every pixel is some object's; B's frame 1 adds the blob's object.
+  EXPECT_EQ(j["per_frame"][1]["covered_pixels_a"], 1200);
+  EXPECT_EQ(j["per_frame"][1]["visible_objects_a"], 2);
+  EXPECT_EQ(j["per_frame"][1]["visible_objects_b"], 3);
+  EXPECT_EQ(j["median_covered_pixels_b"], 1200.0);
+  EXPECT_EQ(j["median_visible_objects_a"], 2.0);
+  EXPECT_EQ(j["median_visible_objects_b"], 2.0);
 
   for (const char* name : {"diff_00000.png", "diff_00001.png", "diff_00002.png"}) {
     RgbaImage diff = readPngRgba(out / name);
@@ -383,6 +400,7 @@ TEST_F(CompareCli, ReportsPerFrameFiguresAndWritesDiffsAndSummary) {
   std::string csv = test::readFile(out / "compare.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 4) << csv;
   EXPECT_EQ(csv.rfind("frame,psnr_db,colour_mismatch_pct,id_mismatch_pct,match_pct", 0), 0u);
+  EXPECT_NE(csv.find(",1,1200,2,1200,3\n"), std::string::npos) << csv;  // frame 1's census
 
   // Tolerance 0: the shifted edge now costs one column of frame 2.
   RunResult strict = run("compare --quiet --json --tolerance-px 0 " + a_.string() + " " +
@@ -408,6 +426,8 @@ TEST_F(CompareCli, FramesWithoutIdsAreComparedByColour) {
   nlohmann::json j = nlohmann::json::parse(r.output);
   EXPECT_EQ(j["ids_compared_frames"], 0);
   EXPECT_TRUE(j["per_frame"][1]["id_mismatch_pct"].is_null());
+  EXPECT_TRUE(j["per_frame"][1]["visible_objects_b"].is_null());
+  EXPECT_TRUE(j["median_covered_pixels_a"].is_null());
   EXPECT_EQ(j["mean_match_pct"], 100.0);
 }
 

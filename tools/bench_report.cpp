@@ -168,6 +168,25 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
            << fmt(ref_ms / num(r, "median_frame_ms")) << "x |\n";
       }
     }
+    // What the frames show, read off the reference's id images by the compare: the output a
+    // frame's cost should follow (two plants' frames with the same census should cost alike).
+    bool census_header = false;
+    for (const json& m : models) {
+      const json& pm = m.at("paths").at(path);
+      for (const auto& title : kModeTitles) {
+        if (!pm.contains(title[0]) || !pm[title[0]].contains("fidelity")) continue;
+        const json& f = pm[title[0]]["fidelity"];
+        if (!f.contains("median_covered_pixels_a") || !f["median_covered_pixels_a"].is_number())
+          continue;
+        if (!census_header)
+          md << "\nShown per frame by the reference (medians over its id images):\n\n";
+        census_header = true;
+        md << "- " << m.value("size", "?") << ": "
+           << fmt(f["median_covered_pixels_a"].get<double>(), 0) << " pixels covered, "
+           << fmt(f["median_visible_objects_a"].get<double>(), 0) << " distinct objects\n";
+        break;
+      }
+    }
   }
 
   // Plots.

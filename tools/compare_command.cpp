@@ -46,6 +46,7 @@ struct FrameResult {
   uint32_t number = 0;
   bool ids_compared = false;
   ImageCompareResult result;
+  IdCensus census_a, census_b;  // what each frame shows (ids compared only)
 };
 
 // The frame number of "frame_<1..9 digits>.png", or nothing for any other name.
@@ -137,6 +138,8 @@ FrameResult compareFrame(const CompareOptions& o, const FrameFile& fa, const Fra
     ids_a = readIds(ids_path_a, a.width, a.height);
     ids_b = readIds(ids_path_b, b.width, b.height);
     frame.ids_compared = true;
+    frame.census_a = censusOf(ids_a);
+    frame.census_b = censusOf(ids_b);
   }
 
   ImageCompareOptions options;
@@ -179,6 +182,23 @@ std::vector<FrameResult> compareAll(const CompareOptions& o, const std::vector<F
 
 double percent(double share) { return share * 100.0; }
 
+// The median over the frames with ids of one census figure, or null when no frame had ids.
+nlohmann::json medianCensus(const std::vector<FrameResult>& frames,
+                            uint64_t (*figure)(const FrameResult&)) {
+  std::vector<uint64_t> values;
+  for (const FrameResult& f : frames)
+    if (f.ids_compared) values.push_back(figure(f));
+  if (values.empty()) return nullptr;
+  std::sort(values.begin(), values.end());
+  const size_t mid = values.size() / 2;
+  return values.size() % 2 ? double(values[mid]) : 0.5 * double(values[mid - 1] + values[mid]);
+}
+
+// A frame's census figure for the per-frame records, null without ids.
+nlohmann::json censusFigure(const FrameResult& f, uint64_t value) {
+  return f.ids_compared ? nlohmann::json(value) : nlohmann::json(nullptr);
+}
+
 nlohmann::json summarize(const CompareOptions& o, const std::vector<FrameResult>& frames) {
   double match_sum = 0, colour_sum = 0, id_sum = 0, psnr_sum = 0;
   size_t ids_frames = 0, identical = 0, psnr_frames = 0;
@@ -210,7 +230,11 @@ nlohmann::json summarize(const CompareOptions& o, const std::vector<FrameResult>
                                                  ? nlohmann::json(percent(r.id_mismatch_share))
                                                  : nlohmann::json(nullptr)},
                          {"match_pct", percent(r.match_share)},
-                         {"ids_compared", f.ids_compared}});
+                         {"ids_compared", f.ids_compared},
+                         {"covered_pixels_a", censusFigure(f, f.census_a.covered_pixels)},
+                         {"visible_objects_a", censusFigure(f, f.census_a.visible_objects)},
+                         {"covered_pixels_b", censusFigure(f, f.census_b.covered_pixels)},
+                         {"visible_objects_b", censusFigure(f, f.census_b.visible_objects)}});
   }
   const double n = double(frames.size());
   nlohmann::json j;
@@ -231,20 +255,39 @@ nlohmann::json summarize(const CompareOptions& o, const std::vector<FrameResult>
   j["min_psnr_db"] = lowest_psnr->result.psnr_db;
   j["min_psnr_frame"] = lowest_psnr->number;
   j["identical_frames"] = identical;
+  j["median_covered_pixels_a"] =
+      medianCensus(frames, [](const FrameResult& f) { return f.census_a.covered_pixels; });
+  j["median_visible_objects_a"] =
+      medianCensus(frames, [](const FrameResult& f) { return f.census_a.visible_objects; });
+  j["median_covered_pixels_b"] =
+      medianCensus(frames, [](const FrameResult& f) { return f.census_b.covered_pixels; });
+  j["median_visible_objects_b"] =
+      medianCensus(frames, [](const FrameResult& f) { return f.census_b.visible_objects; });
   j["per_frame"] = per_frame;
   return j;
 }
 
 void writeCsv(const fs::path& path, const std::vector<FrameResult>& frames) {
   std::ofstream out(path);
-  out << "frame,psnr_db,colour_mismatch_pct,id_mismatch_pct,match_pct,ids_compared\n";
-  char line[160];
+  out << "frame,psnr_db,colour_mismatch_pct,id_mismatch_pct,match_pct,ids_compared,"
+         "covered_pixels_a,visible_objects_a,covered_pixels_b,visible_objects_b\n";
+  char line[240];
   for (const FrameResult& f : frames) {
     const ImageCompareResult& r = f.result;
-    std::snprintf(line, sizeof line, "%u,%.4f,%.4f,%.4f,%.4f,%d\n", f.number, r.psnr_db,
+    std::snprintf(line, sizeof line, "%u,%.4f,%.4f,%.4f,%.4f,%d", f.number, r.psnr_db,
                   percent(r.colour_mismatch_share), percent(r.id_mismatch_share),
                   percent(r.match_share), f.ids_compared ? 1 : 0);
     out << line;
+    if (f.ids_compared) {
+      std::snprintf(line, sizeof line, ",%llu,%llu,%llu,%llu\n",
+                    (unsigned long long)f.census_a.covered_pixels,
+                    (unsigned long long)f.census_a.visible_objects,
+                    (unsigned long long)f.census_b.covered_pixels,
+                    (unsigned long long)f.census_b.visible_objects);
+      out << line;
+    } else {
+      out << ",,,,\n";
+    }
   }
   if (!out.flush()) throw std::runtime_error(path.string() + ": cannot write");
 }
@@ -276,6 +319,13 @@ void printText(const std::vector<FrameResult>& frames, const nlohmann::json& s) 
               s["mean_psnr_db"].get<double>(),
               frames.size() - s["identical_frames"].get<size_t>(), s["min_psnr_db"].get<double>(),
               s["min_psnr_frame"].get<uint32_t>(), s["identical_frames"].get<size_t>());
+  if (s["median_covered_pixels_a"].is_number())
+    std::printf("shown    median per frame: A %.0f pixels covered, %.0f objects; "
+                "B %.0f pixels, %.0f objects\n",
+                s["median_covered_pixels_a"].get<double>(),
+                s["median_visible_objects_a"].get<double>(),
+                s["median_covered_pixels_b"].get<double>(),
+                s["median_visible_objects_b"].get<double>());
 }
 
 }  // namespace
