@@ -177,7 +177,8 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       if (thin_axes == 2) {
         // A beam thinner than a pixel both ways across: a ribbon along its longest axis, as
         // wide as its cross-section seen from the eye (beamRibbon), the silhouette its box
-        // would show, in two triangles instead of six to twelve.
+        // would show, in two triangles instead of six to twelve, each fragment shaded with the
+        // face under it.
         for (int axis = 0; axis < 3; ++axis)
           if (axis != longest) across = std::max(across, 2.0f * b.size[axis]);
         f.shape = Shape::Ribbon;

@@ -45,8 +45,9 @@ enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Ribbon, Point, Profile, 
 // The surface an instance of primitive `type` is drawn with, when it is not thin.
 Shape surfaceOf(uint32_t type);
 
-// The per-frame batches: triangles by back-face culling, points.
-enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kPoints, kBatchCount };
+// The per-frame batches: triangles by back-face culling, points, and the thin beams' bands
+// (vertices of their own: both faces' normals).
+enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kPoints, kBeams, kBatchCount };
 
 constexpr uint8_t kValid = 1, kCapped = 2, kMirrored = 4;
 constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills its box: a box

@@ -88,6 +88,15 @@ struct SmoothVertex {
   uint32_t normal;     // packNormal
 };
 
+// One vertex of a thin beam's band (beamRibbon): 28 bytes.
+struct BeamVertex {
+  glm::vec3 position;  // metres from the eye
+  uint32_t object;     // object index
+  uint32_t normal_u;   // packNormal: the first long face's
+  uint32_t normal_w;   // and the second's
+  float across;        // signed metres from the edge where the faces meet (< 0: first face)
+};
+
 // A unit mesh with arrays of its own (base_vertex and first_index 0), so that threads expanding
 // instances read it while another thread makes a mesh they have not met yet.
 struct OwnedUnitMesh {
@@ -101,6 +110,7 @@ struct OwnedUnitMesh {
 // batch is the one a single thread makes.
 struct ExpandedPart {
   std::vector<SmoothVertex> vertices;
+  std::vector<BeamVertex> beam_vertices;  // indexed by indices[kBeams]
   std::array<std::vector<uint32_t>, kBatchCount> indices;
   // Drawn (both passes), hidden last frame (first pass), to test (second pass): cluster, instance.
   std::vector<std::pair<uint32_t, uint32_t>> drawn, deferred, to_test;
@@ -111,6 +121,7 @@ struct ExpandedPart {
 
   void clear() {
     vertices.clear();
+    beam_vertices.clear();
     for (auto& list : indices) list.clear();
     drawn.clear();
     deferred.clear();
@@ -121,9 +132,13 @@ struct ExpandedPart {
   // Appends `part` after this one's contents.
   void append(const ExpandedPart& part) {
     const auto base = static_cast<uint32_t>(vertices.size());
+    const auto beam_base = static_cast<uint32_t>(beam_vertices.size());
     vertices.insert(vertices.end(), part.vertices.begin(), part.vertices.end());
-    for (uint32_t batch = 0; batch < kBatchCount; ++batch)
-      for (uint32_t index : part.indices[batch]) indices[batch].push_back(base + index);
+    beam_vertices.insert(beam_vertices.end(), part.beam_vertices.begin(), part.beam_vertices.end());
+    for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
+      const uint32_t offset = batch == kBeams ? beam_base : base;
+      for (uint32_t index : part.indices[batch]) indices[batch].push_back(offset + index);
+    }
     drawn.insert(drawn.end(), part.drawn.begin(), part.drawn.end());
     deferred.insert(deferred.end(), part.deferred.begin(), part.deferred.end());
     to_test.insert(to_test.end(), part.to_test.begin(), part.to_test.end());
@@ -171,6 +186,7 @@ struct ParametricInstanceMeshes::Impl {
     }
   }
   GLuint program = 0, vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
+  GLuint beam_program = 0, beam_vertex_array = 0, beam_vertex_buffer = 0;
   // Unit meshes by (shape, a, b), published once made (unitMesh); `made` owns them.
   static constexpr size_t kUnitSlots = size_t(Shape::None) * kLevels.size() * kLevels.size();
   std::array<std::atomic<const OwnedUnitMesh*>, kUnitSlots> unit_slots{};
@@ -213,9 +229,12 @@ struct ParametricInstanceMeshes::Impl {
 
   ~Impl() {
     glDeleteProgram(program);
+    glDeleteProgram(beam_program);
     glDeleteBuffers(1, &vertex_buffer);
+    glDeleteBuffers(1, &beam_vertex_buffer);
     glDeleteBuffers(1, &index_buffer);
     glDeleteVertexArrays(1, &vertex_array);
+    glDeleteVertexArrays(1, &beam_vertex_array);
   }
 
   // Safe to call from several threads at once: a mesh is made once, under the mutex, and read
@@ -370,9 +389,11 @@ struct ParametricInstanceMeshes::Impl {
 
   // Appends box-framed instance `i` (a box, or an extrusion or revolution by its box) thinner
   // than a pixel across its two shorter axes as its silhouette: a band along the longest axis
-  // `axis` facing the eye, as wide as the box's cross-section seen from there, cut where the two
-  // long faces the eye sees meet, each part shaded with its face's normal. Four triangles show
-  // what the box's six to twelve would, but for its end faces.
+  // `axis` facing the eye, as wide as the box's cross-section seen from there, each side of the
+  // line where the two long faces the eye sees meet shaded with its face's normal (the
+  // fragments choose, parametricBeamFragmentShader). Two triangles show what the box's six to
+  // twelve would, but for its end faces; two bands of two, one a face, cost llvmpipe 8 % more
+  // on the 50M plant's orbit (docs/benchmarks.md).
   void beamRibbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b,
                   const glm::vec3& anchor_eye, int axis) {
     const pkg::InstanceRecord& in = view->instances()[i];
@@ -405,9 +426,10 @@ struct ParametricInstanceMeshes::Impl {
       n_w = -n_w;
     }
     const uint32_t packed_u = packNormal(n_u), packed_w = packNormal(n_w);
-    std::vector<SmoothVertex>& vertices = part.vertices;
+    std::vector<BeamVertex>& vertices = part.beam_vertices;
     // One cross-section: across `side`, the face at +u spans the edges u - w and u + w, the face
-    // at +w the edges u + w and w - u; the outer edges are the silhouette.
+    // at +w the edges u + w and w - u; the outer edges are the silhouette, and `across` is zero
+    // at the shared edge u + w.
     auto section = [&](const glm::vec3& at) {
       const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
       glm::vec3 side = glm::cross(tangent, to_eye);
@@ -416,19 +438,15 @@ struct ParametricInstanceMeshes::Impl {
       side = glm::normalize(side);
       const float shared = glm::dot(u + w, side);
       const float u_outer = glm::dot(u - w, side), w_outer = glm::dot(w - u, side);
-      vertices.push_back({at + u_outer * side, in.object, packed_u});
-      vertices.push_back({at + shared * side, in.object, packed_u});
-      vertices.push_back({at + shared * side, in.object, packed_w});
-      vertices.push_back({at + w_outer * side, in.object, packed_w});
+      vertices.push_back({at + u_outer * side, in.object, packed_u, packed_w, -std::abs(shared - u_outer)});
+      vertices.push_back({at + w_outer * side, in.object, packed_u, packed_w, std::abs(w_outer - shared)});
     };
     const auto base = static_cast<uint32_t>(vertices.size());
     section(centre - along);
     section(centre + along);
-    std::vector<uint32_t>& out = part.indices[kTwoSided];
-    for (uint32_t face = 0; face < 2; ++face) {
-      const uint32_t a = base + 2 * face, c = a + 4;  // this face's pair at each end
-      out.insert(out.end(), {a, a + 1, c + 1, a, c + 1, c});
-    }
+    // Outer edge of the first face at each end (base, base + 2), of the second (base + 1, + 3).
+    part.indices[kBeams].insert(part.indices[kBeams].end(),
+                                {base, base + 1, base + 3, base, base + 3, base + 2});
   }
 
   // Appends instance `i` in form `f` to its batch, positions relative to the eye.
@@ -557,6 +575,26 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   glCreateBuffers(1, &s.index_buffer);
   glVertexArrayVertexBuffer(s.vertex_array, 0, s.vertex_buffer, 0, sizeof(SmoothVertex));
   glVertexArrayElementBuffer(s.vertex_array, s.index_buffer);
+  s.beam_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricBeamVertexShader()},
+                                   {GL_FRAGMENT_SHADER, gl::parametricBeamFragmentShader()}},
+                                  "ParametricInstanceMeshes (beams)");
+  glCreateVertexArrays(1, &s.beam_vertex_array);
+  const GLuint beams = s.beam_vertex_array;
+  glEnableVertexArrayAttrib(beams, 0);
+  glVertexArrayAttribFormat(beams, 0, 3, GL_FLOAT, GL_FALSE, offsetof(BeamVertex, position));
+  glEnableVertexArrayAttrib(beams, 1);
+  glVertexArrayAttribIFormat(beams, 1, 1, GL_UNSIGNED_INT, offsetof(BeamVertex, object));
+  glEnableVertexArrayAttrib(beams, 2);
+  glVertexArrayAttribFormat(beams, 2, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(BeamVertex, normal_u));
+  glEnableVertexArrayAttrib(beams, 3);
+  glVertexArrayAttribFormat(beams, 3, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(BeamVertex, normal_w));
+  glEnableVertexArrayAttrib(beams, 4);
+  glVertexArrayAttribFormat(beams, 4, 1, GL_FLOAT, GL_FALSE, offsetof(BeamVertex, across));
+  for (GLuint attribute = 0; attribute < 5; ++attribute)
+    glVertexArrayAttribBinding(beams, attribute, 0);
+  glCreateBuffers(1, &s.beam_vertex_buffer);
+  glVertexArrayVertexBuffer(beams, 0, s.beam_vertex_buffer, 0, sizeof(BeamVertex));
+  glVertexArrayElementBuffer(beams, s.index_buffer);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
     char message[96];
     std::snprintf(message, sizeof message, "ParametricInstanceMeshes: set-up failed (GL error 0x%04x)",
@@ -768,7 +806,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
                                       InstanceLodStats& stats) {
   Impl& s = *impl_;
   ExpandedPart& frame = s.frame;
-  if (frame.vertices.empty()) return;
+  if (frame.vertices.empty() && frame.beam_vertices.empty()) return;
   // One upload of every batch, then each batch drawn whole or in flushed parts.
   s.all_indices.clear();
   std::array<size_t, kBatchCount + 1> first{};
@@ -787,16 +825,25 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       s.primitives_per_flush != 0 && primitives < 4 * std::max<uint64_t>(s.batch_instances, 1);
   glNamedBufferData(s.vertex_buffer, GLsizeiptr(frame.vertices.size() * sizeof(SmoothVertex)),
                     frame.vertices.data(), GL_STREAM_DRAW);
+  glNamedBufferData(s.beam_vertex_buffer,
+                    GLsizeiptr(frame.beam_vertices.size() * sizeof(BeamVertex)),
+                    frame.beam_vertices.data(), GL_STREAM_DRAW);
   glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
                     s.all_indices.data(), GL_STREAM_DRAW);
+  for (GLuint program : {s.program, s.beam_program}) {
+    glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
+                              &view_projection[0][0]);
+    glProgramUniform1ui(program, gl::kObjectColorCountLocation, object_color_count);
+  }
   glUseProgram(s.program);
-  glProgramUniformMatrix4fv(s.program, gl::kViewProjectionLocation, 1, GL_FALSE,
-                            &view_projection[0][0]);
-  glProgramUniform1ui(s.program, gl::kObjectColorCountLocation, object_color_count);
   glBindVertexArray(s.vertex_array);
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
     const size_t count = first[batch + 1] - first[batch];
     if (count == 0) continue;
+    if (batch == kBeams) {  // the last batch: vertices and a program of their own
+      glUseProgram(s.beam_program);
+      glBindVertexArray(s.beam_vertex_array);
+    }
     if (batch == kCullCcw || batch == kCullCw) {
       glEnable(GL_CULL_FACE);
       glCullFace(GL_BACK);
@@ -818,7 +865,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       ++stats.draw_calls;
     }
     if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
-    if (batch == kTwoSided) stats.two_sided_triangles += count / 3;
+    if (batch == kTwoSided || batch == kBeams) stats.two_sided_triangles += count / 3;
   }
   glDisable(GL_CULL_FACE);
   glFrontFace(GL_CCW);
@@ -826,6 +873,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
   glUseProgram(0);
   // Drawn once: a second submit without a prepare draws nothing.
   frame.vertices.clear();
+  frame.beam_vertices.clear();
   for (auto& list : frame.indices) list.clear();
 }
 

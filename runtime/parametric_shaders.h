@@ -395,4 +395,60 @@ void main() {
 )";
 }
 
+// Thin beams drawn per instance as their silhouette (parametric_instance_meshes.h, beamRibbon):
+// one band of two triangles facing the eye, across the two long faces the eye sees. Each vertex
+// carries both faces' normals and `across`, negative on the first face's side of the edge where
+// the faces meet and positive on the second's, so the fragments on either side of that edge are
+// shaded with their own face's normal, as two bands of two triangles each would be.
+inline std::string parametricBeamVertexShader() {
+  return std::string(R"(#version 450 core
+layout(location = 0) in vec3 position;  // metres from the eye
+layout(location = 1) in uint object;
+layout(location = 2) in vec3 normal_u;  // world, unit: the first face's
+layout(location = 3) in vec3 normal_w;  // and the second's
+layout(location = 4) in float across;   // < 0 over the first face, > 0 over the second
+layout(location = 0) uniform mat4 view_projection;
+out vec3 pos_eye;
+out float v_across;
+flat out uint v_object;
+flat out vec4 v_base;
+flat out vec3 v_normal_u;
+flat out vec3 v_normal_w;
+)") + objectColorGlsl() + R"(
+void main() {
+  pos_eye = position;
+  v_across = across;
+  v_object = object;
+  v_base = objectBaseColor(object);
+  v_normal_u = normal_u;
+  v_normal_w = normal_w;
+  gl_Position = view_projection * vec4(pos_eye, 1.0);
+}
+)";
+}
+
+inline std::string parametricBeamFragmentShader() {
+  return std::string(R"(#version 450 core
+in vec3 pos_eye;
+in float v_across;
+flat in uint v_object;
+flat in vec4 v_base;
+flat in vec3 v_normal_u;
+flat in vec3 v_normal_w;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+)") + shadingGlsl() + R"(
+void main() {
+  // As parametricSmoothFragmentShader with a face's normal: turned to the side seen.
+  vec3 facet = facetNormal(pos_eye);
+  if (dot(facet, pos_eye) > 0.0) facet = -facet;
+  vec3 face = v_across < 0.0 ? v_normal_u : v_normal_w;
+  float len = max(length(face), 1e-30);
+  vec3 n = dot(face, facet) < 0.0 ? -face / len : face / len;
+  out_color = shadeSeenSide(v_base, n, pos_eye);
+  out_id = v_object + 1u;
+}
+)";
+}
+
 }  // namespace tw::gl

@@ -387,6 +387,46 @@ TEST_F(ParametricRendering, ThinThingsCoverThePixelsOfTheirTrueSurface) {
   EXPECT_LT(compare(thin, fine, 0.01).mismatchShare(), 0.1);
 }
 
+// A beam thinner than a pixel both ways, rolled 45 degrees about its length, shows the eye two
+// long faces, one lit from the sky and one facing the ground. Its band is one pair of triangles,
+// and each pixel it covers takes the colour of the face under the pixel's centre, as the finely
+// tessellated box does: one shade for the whole band would get half of them wrong.
+TEST_F(ParametricRendering, ThinBeamShadesEachFaceItsOwn) {
+  const Camera camera = lookingAt({0.0, 0.0, 0.0}, {0.0, 60.0, 0.0});
+  const float px = static_cast<float>(60.0 / camera.pixelScale(kHeight));  // metres per pixel
+  const std::vector<Part> parts = {
+      {1, Box{glm::vec3(14.0f, 0.3f * px, 0.3f * px)}, placed({0, 60, 1.0}, {45, 5, 0})},
+  };
+  const Frame thin = render(buildPackage("thin_beam", parts, false), camera,
+                            ParametricMode::Tessellated, OcclusionMode::Off, nullptr, false, 1.0);
+  const Frame fine = render(buildPackage("thin_beam_mesh", parts, true), camera,
+                            ParametricMode::Impostor, OcclusionMode::Off, nullptr, true);
+  EXPECT_EQ(thin.stats.parametric_thin_instances, 1u);
+  EXPECT_LE(thin.stats.parametric_triangles, 2u);
+  auto colourAt = [](const Frame& f, size_t i) {
+    return glm::ivec3(f.rgba[4 * i], f.rgba[4 * i + 1], f.rgba[4 * i + 2]);
+  };
+  auto close = [](const glm::ivec3& a, const glm::ivec3& b) {
+    return glm::all(glm::lessThanEqual(glm::abs(a - b), glm::ivec3(24)));
+  };
+  size_t both = 0, same_colour = 0;
+  std::vector<glm::ivec3> fine_colours;
+  for (size_t i = 0; i < fine.ids.size(); ++i) {
+    if (fine.ids[i] != 1) continue;
+    fine_colours.push_back(colourAt(fine, i));
+    if (thin.ids[i] != 1) continue;
+    ++both;
+    same_colour += close(colourAt(thin, i), colourAt(fine, i));
+  }
+  // The fine box shows two shades, far enough apart that one shade could not match both.
+  ASSERT_GT(fine_colours.size(), 40u);
+  const bool two_shades = std::any_of(fine_colours.begin(), fine_colours.end(),
+                                      [&](const glm::ivec3& c) { return !close(c, fine_colours[0]); });
+  ASSERT_TRUE(two_shades);
+  ASSERT_GT(both, 40u);
+  EXPECT_GT(double(same_colour) / double(both), 0.9) << same_colour << " of " << both;
+}
+
 // A pipe about 6 px across, upright 20 m ahead, turned about its own axis: at tau = 1 its ring
 // has a handful of segments. Seen from any side it covers about the pixels of the true pipe
 // (straddling rings); inscribed rings would make it up to 30 % thinner seen flat-on, and about
