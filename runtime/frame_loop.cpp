@@ -285,19 +285,16 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
       stats.parametric_skipped = uint32_t(parametric_list.size());
     culler_->splitByLastVisible(eye, hzb_cut_, pass1_, rest_, stats);
     splitByKind(pass1_, mesh_pass_, parametric_pass_);
-    // The first pass overlaps its parts (docs/runtime.md, "Overlap"): a worker chooses and
-    // expands the tessellated parametrics while this thread submits the meshes, and the flush
-    // hands the meshes to llvmpipe's rasterizer threads before the parametrics follow.
+    // The first pass overlaps its parts (docs/runtime.md, "Overlap"): a worker starts choosing
+    // and expanding the tessellated parametrics (prepare() hands their runs to it and returns)
+    // while this thread submits the meshes, and the flush hands the meshes to llvmpipe's
+    // rasterizer threads before the parametrics follow, each run drawn as soon as it is done.
     last_parametric_view_.pass = InstancePass::First;
-    tbb::task_group prepare;
     if (!parametric_pass_.empty())
-      prepare.run([this] {
-        parametric_->prepare(parametric_pass_, last_parametric_view_, options_.parametrics);
-      });
+      parametric_->prepare(parametric_pass_, last_parametric_view_, options_.parametrics);
     appendItems(mesh_pass_, eye, items_);
     renderer_->draw(*pool_, items_);
     glFlush();
-    prepare.wait();
     // Tessellated parametrics are also culled instance by instance, in the same two passes
     // (parametric_instance_meshes.h, "Occlusion").
     auto box_hidden = [this, &frame](const glm::vec3& lo, const glm::vec3& hi) {

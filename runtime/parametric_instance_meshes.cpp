@@ -17,12 +17,14 @@
 #include <numbers>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 #include "camera.h"
 #include "gl_program.h"
@@ -185,8 +187,23 @@ struct ParametricInstanceMeshes::Impl {
       if (run.lo.x <= run.hi.x) run_clusters.push_back(run);
     }
   }
-  GLuint program = 0, vertex_array = 0, vertex_buffer = 0, index_buffer = 0;
-  GLuint beam_program = 0, beam_vertex_array = 0, beam_vertex_buffer = 0;
+  GLuint program = 0, vertex_array = 0, beam_program = 0, beam_vertex_array = 0;
+  // The GL buffers of each part drawn in a frame (set 0 for a batch drawn whole): a part's are
+  // filled while llvmpipe may still read the previous part's.
+  struct BufferSet {
+    GLuint vertices = 0, beam_vertices = 0, indices = 0;
+  };
+  std::vector<BufferSet> buffer_sets;
+  BufferSet& bufferSet(size_t k) {
+    while (buffer_sets.size() <= k) {
+      BufferSet set;
+      glCreateBuffers(1, &set.vertices);
+      glCreateBuffers(1, &set.beam_vertices);
+      glCreateBuffers(1, &set.indices);
+      buffer_sets.push_back(set);
+    }
+    return buffer_sets[k];
+  }
   // Unit meshes by (shape, a, b), published once made (unitMesh); `made` owns them.
   static constexpr size_t kUnitSlots = size_t(Shape::None) * kLevels.size() * kLevels.size();
   std::array<std::atomic<const OwnedUnitMesh*>, kUnitSlots> unit_slots{};
@@ -227,14 +244,230 @@ struct ParametricInstanceMeshes::Impl {
   uint32_t primitives_per_flush = 8192;  // 0: each batch in one draw
   uint64_t batch_instances = 0;          // expanded into the prepared batch
 
+  // The frame's choice, fixed by prepare() for the expansion, which may run on after it returns.
+  struct FrameChoice {
+    InstanceLodView view;
+    std::array<glm::vec4, 4> planes{};  // the frustum's side planes, eye-relative, unit normals
+    double pixel_scale = 1.0, near_m = 1e-6;
+    float near_reach = 0.0f;  // how far from the eye the near plane reaches (its corners)
+    bool test = false;        // second pass: instances are left for the pyramid's test
+  };
+  FrameChoice choice;
+  std::vector<uint32_t> frame_clusters;  // prepare()'s
+  // Streaming: prepare() of a first or only pass in several runs hands the runs to a worker,
+  // which expands them in order, each into parts[r]; submit() draws each part as soon as it is
+  // done and, while it waits for one, expands the next run nobody has claimed. So the GL
+  // thread's share of llvmpipe's work (it shades and bins every vertex of a draw) overlaps the
+  // expansion instead of following it (docs/parametrics.md, "Streamed").
+  bool streaming = false;
+  size_t stream_runs = 0;
+  std::atomic<size_t> next_run{0};
+  std::unique_ptr<std::atomic<uint8_t>[]> run_done;
+  size_t run_done_capacity = 0;
+  std::vector<ParametricMeshInstance>* stream_profiles = nullptr;
+  tbb::task_group expansion;
+
   ~Impl() {
+    expansion.wait();
     glDeleteProgram(program);
     glDeleteProgram(beam_program);
-    glDeleteBuffers(1, &vertex_buffer);
-    glDeleteBuffers(1, &beam_vertex_buffer);
-    glDeleteBuffers(1, &index_buffer);
+    for (const BufferSet& set : buffer_sets) {
+      glDeleteBuffers(1, &set.vertices);
+      glDeleteBuffers(1, &set.beam_vertices);
+      glDeleteBuffers(1, &set.indices);
+    }
     glDeleteVertexArrays(1, &vertex_array);
     glDeleteVertexArrays(1, &beam_vertex_array);
+  }
+
+  // The distance of instance `b` (its centre at `centre`, eye-relative) for its level of detail.
+  double distanceOf(const InstanceBounds& b, const glm::vec3& centre) const {
+    return std::max(double(glm::length(centre)) - b.radius, choice.near_m);
+  }
+
+  // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye) into
+  // `part`. Called from several threads at once, each with its own part.
+  void place(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    InstanceLodStats& stats = part.stats;
+    const InstanceBounds& b = bounds[i];
+    const double distance = distanceOf(b, anchor_eye + b.centre);
+    const double px_per_m = choice.pixel_scale / distance;
+    const float metres_per_px = static_cast<float>(1.0 / px_per_m);
+    Form form =
+        chooseForm(b, static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px,
+                   static_cast<float>(choice.view.thin_px) * metres_per_px,
+                   static_cast<float>(choice.view.min_thin_px) * metres_per_px);
+    if (form.shape == Shape::None) {
+      ++stats.instances_culled;
+      return;
+    }
+    if (form.shape != Shape::Point && form.shape != Shape::Ribbon)
+      cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach),
+                    ((b.flags & kRunMember) && eye_clear_of_runs) ||
+                        (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, choice.near_reach)));
+    if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
+    ++stats.instances_drawn;
+    if (form.shape == Shape::Profile) {
+      FaceCull cull = FaceCull::None;
+      if ((b.flags & kClosedProfile) && eyeOutsideSolid(b, -anchor_eye, choice.near_reach))
+        cull = (b.flags & kMirrored) ? FaceCull::BackOfCw : FaceCull::BackOfCcw;
+      part.profiles.push_back({c, i, distance, cull});
+      return;
+    }
+    stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
+    if (form.shape == Shape::Ribbon) {
+      if (form.box_frame)
+        beamRibbon(part, i, b, anchor_eye, form.long_axis);
+      else
+        ribbon(part, i, b, anchor_eye, kLevels[form.a]);
+      return;
+    }
+    if (form.shape == Shape::Point) {
+      // A point is its instance's box centre, which the bounds hold: placed without a unit mesh,
+      // the instance's box or its transform (some 18,000 of the 50M orbit's 47,000 instances a
+      // frame are points).
+      part.indices[kPoints].push_back(static_cast<uint32_t>(part.vertices.size()));
+      part.vertices.push_back({anchor_eye + b.centre, view->instances()[i].object, 0u});
+      return;
+    }
+    if (form.shape == Shape::Lathe) {
+      lathe(part, i, b, anchor_eye, kLevels[form.a],
+            0.5f * static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px);
+      return;
+    }
+    expand(part, i, b, anchor_eye, form);
+  }
+
+  // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
+  void consider(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    InstanceLodStats& stats = part.stats;
+    const InstanceBounds& b = bounds[i];
+    if (!(b.flags & kValid)) return;
+    const glm::vec3 centre = anchor_eye + b.centre;
+    const double px_per_m = choice.pixel_scale / distanceOf(b, centre);
+    bool outside = 2.0 * b.radius * px_per_m < choice.view.min_feature_px;
+    for (const glm::vec4& plane : choice.planes)
+      outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
+    if (outside) {
+      ++stats.instances_culled;
+      return;
+    }
+    if (choice.view.pass == InstancePass::First && hidden_last[i]) {
+      part.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
+      return;
+    }
+    if (choice.test) {
+      part.to_test.push_back({c, i});
+      return;
+    }
+    place(part, c, anchor_eye, i);
+  }
+
+  // Considers every instance of frame_clusters[begin, end) into `part`, in cluster order.
+  void expandClusters(ExpandedPart& part, size_t begin, size_t end) {
+    const auto records = view->clusters();
+    for (size_t k = begin; k < end; ++k) {
+      const uint32_t c = frame_clusters[k];
+      if (c >= records.size() ||
+          records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
+        continue;
+      const pkg::ClusterRecord& record = records[c];
+      if (record.instance_first > bounds.size() ||
+          record.instance_count > bounds.size() - record.instance_first)
+        continue;
+      const glm::vec3 anchor_eye(clusterAnchor(record) - choice.view.eye);
+      for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
+        consider(part, c, anchor_eye, i);
+    }
+  }
+  // Run r of `runs` over frame_clusters, into parts[r].
+  void expandRun(size_t r, size_t runs) {
+    parts[r].clear();
+    const size_t n = frame_clusters.size();
+    expandClusters(parts[r], n * r / runs, n * (r + 1) / runs);
+  }
+  // Streaming: expands the next run nobody has claimed; false when none is left.
+  bool claimAndExpand() {
+    const size_t r = next_run.fetch_add(1, std::memory_order_relaxed);
+    if (r >= stream_runs) return false;
+    expandRun(r, stream_runs);
+    run_done[r].store(1, std::memory_order_release);
+    return true;
+  }
+
+  // Uploads `part` into buffer set `set` and draws its batches, adding to `stats`. A far view's
+  // primitives go in draws of at most primitives_per_flush, each flushed once that many have
+  // gone since the last flush (`unflushed` carries the count from part to part): llvmpipe's
+  // rasterizer threads start on a scene only when it is flushed, and until then the submitting
+  // thread shades and bins every vertex alone (docs/runtime.md, "Overlap"). A near view's
+  // (four or more primitives an instance) goes whole: every extra scene then reloads and stores
+  // the many tiles its large triangles cover, and on the walked decks parts were 5 % slower.
+  void drawPart(ExpandedPart& part, size_t set_index, uint64_t part_instances, size_t& unflushed,
+                InstanceLodStats& stats) {
+    if (part.vertices.empty() && part.beam_vertices.empty()) return;
+    all_indices.clear();
+    std::array<size_t, kBatchCount + 1> first{};
+    for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
+      first[batch] = all_indices.size();
+      all_indices.insert(all_indices.end(), part.indices[batch].begin(), part.indices[batch].end());
+    }
+    first[kBatchCount] = all_indices.size();
+    const size_t primitives = part.indices[kPoints].size() +
+                              (all_indices.size() - part.indices[kPoints].size()) / 3;
+    const bool in_parts =
+        primitives_per_flush != 0 && primitives < 4 * std::max<uint64_t>(part_instances, 1);
+    const BufferSet& set = bufferSet(set_index);
+    glNamedBufferData(set.vertices, GLsizeiptr(part.vertices.size() * sizeof(SmoothVertex)),
+                      part.vertices.data(), GL_STREAM_DRAW);
+    glNamedBufferData(set.beam_vertices, GLsizeiptr(part.beam_vertices.size() * sizeof(BeamVertex)),
+                      part.beam_vertices.data(), GL_STREAM_DRAW);
+    glNamedBufferData(set.indices, GLsizeiptr(all_indices.size() * sizeof(uint32_t)),
+                      all_indices.data(), GL_STREAM_DRAW);
+    glVertexArrayVertexBuffer(vertex_array, 0, set.vertices, 0, sizeof(SmoothVertex));
+    glVertexArrayElementBuffer(vertex_array, set.indices);
+    glVertexArrayVertexBuffer(beam_vertex_array, 0, set.beam_vertices, 0, sizeof(BeamVertex));
+    glVertexArrayElementBuffer(beam_vertex_array, set.indices);
+    glUseProgram(program);
+    glBindVertexArray(vertex_array);
+    for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
+      const size_t count = first[batch + 1] - first[batch];
+      if (count == 0) continue;
+      if (batch == kBeams) {  // the last batch: vertices and a program of their own
+        glUseProgram(beam_program);
+        glBindVertexArray(beam_vertex_array);
+      }
+      if (batch == kCullCcw || batch == kCullCw) {
+        glEnable(GL_CULL_FACE);
+        glCullFace(GL_BACK);
+        glFrontFace(batch == kCullCw ? GL_CW : GL_CCW);
+      } else {
+        glDisable(GL_CULL_FACE);
+      }
+      const GLenum mode = batch == kPoints ? GL_POINTS : GL_TRIANGLES;
+      // The 50M plant's orbit (121,516 triangles a frame) fell from 47.6 to 39.5 ms when its
+      // batch went in flushed parts (docs/benchmarks.md, "A far view's parametric batch in
+      // flushed parts").
+      const size_t vertices_per_primitive = mode == GL_TRIANGLES ? 3 : 1;
+      const size_t most = in_parts ? size_t(primitives_per_flush) * vertices_per_primitive : count;
+      for (size_t at = 0; at < count; at += most) {
+        const size_t n = std::min(most, count - at);
+        glDrawElements(mode, GLsizei(n), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>((first[batch] + at) * sizeof(uint32_t)));
+        ++stats.draw_calls;
+        if (in_parts) {
+          unflushed += n / vertices_per_primitive;
+          if (unflushed >= primitives_per_flush) {
+            glFlush();
+            unflushed = 0;
+          }
+        }
+      }
+      if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
+      if (batch == kTwoSided || batch == kBeams) stats.two_sided_triangles += count / 3;
+    }
+    part.vertices.clear();
+    part.beam_vertices.clear();
+    for (auto& list : part.indices) list.clear();
   }
 
   // Safe to call from several threads at once: a mesh is made once, under the mutex, and read
@@ -571,10 +804,7 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   glEnableVertexArrayAttrib(s.vertex_array, 2);
   glVertexArrayAttribFormat(s.vertex_array, 2, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(SmoothVertex, normal));
   glVertexArrayAttribBinding(s.vertex_array, 2, 0);
-  glCreateBuffers(1, &s.vertex_buffer);
-  glCreateBuffers(1, &s.index_buffer);
-  glVertexArrayVertexBuffer(s.vertex_array, 0, s.vertex_buffer, 0, sizeof(SmoothVertex));
-  glVertexArrayElementBuffer(s.vertex_array, s.index_buffer);
+  s.bufferSet(0);  // the parts' buffers are bound to the vertex arrays as each is drawn
   s.beam_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricBeamVertexShader()},
                                    {GL_FRAGMENT_SHADER, gl::parametricBeamFragmentShader()}},
                                   "ParametricInstanceMeshes (beams)");
@@ -592,9 +822,6 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   glVertexArrayAttribFormat(beams, 4, 1, GL_FLOAT, GL_FALSE, offsetof(BeamVertex, across));
   for (GLuint attribute = 0; attribute < 5; ++attribute)
     glVertexArrayAttribBinding(beams, attribute, 0);
-  glCreateBuffers(1, &s.beam_vertex_buffer);
-  glVertexArrayVertexBuffer(beams, 0, s.beam_vertex_buffer, 0, sizeof(BeamVertex));
-  glVertexArrayElementBuffer(beams, s.index_buffer);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
     char message[96];
     std::snprintf(message, sizeof message, "ParametricInstanceMeshes: set-up failed (GL error 0x%04x)",
@@ -618,22 +845,29 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
                                                    const InstanceLodView& view,
                                                    std::vector<ParametricMeshInstance>& profiles) {
   Impl& s = *impl_;
+  // A prepare() that was never submitted: its expansion ends before this one starts.
+  s.expansion.wait();
+  s.streaming = false;
   const auto records = s.view->clusters();
+  Impl::FrameChoice& choice = s.choice;
+  choice.view = view;
   // The frustum's side planes, eye-relative (rows of the projection: w +- x, w +- y), each
   // scaled to a unit normal so a sphere's radius compares directly.
   const glm::mat4& m = view.view_projection;
   const glm::vec4 row_x(m[0][0], m[1][0], m[2][0], m[3][0]), row_y(m[0][1], m[1][1], m[2][1], m[3][1]),
       row_w(m[0][3], m[1][3], m[2][3], m[3][3]);
-  std::array<glm::vec4, 4> planes = {row_w + row_x, row_w - row_x, row_w + row_y, row_w - row_y};
-  for (glm::vec4& plane : planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-30f);
-  const double pixel_scale = std::max(view.pixel_scale, 1e-9);
-  const double near_m = std::max(view.near_m, 1e-6);
-  // How far from the eye the near plane reaches (its corners): an eye closer than that to a
-  // surface may see it clipped open, so back faces are kept there.
-  // The rows' lengths are the reciprocals of the frustum's half extents at unit distance.
-  const float near_reach = static_cast<float>(
-      nearPlaneReach(near_m, 1.0 / std::max(double(glm::length(glm::vec3(row_x))), 1e-6),
+  choice.planes = {row_w + row_x, row_w - row_x, row_w + row_y, row_w - row_y};
+  for (glm::vec4& plane : choice.planes) plane /= std::max(glm::length(glm::vec3(plane)), 1e-30f);
+  choice.pixel_scale = std::max(view.pixel_scale, 1e-9);
+  choice.near_m = std::max(view.near_m, 1e-6);
+  // An eye closer to a surface than the near plane reaches may see it clipped open, so back
+  // faces are kept there. The rows' lengths are the reciprocals of the frustum's half extents
+  // at unit distance.
+  choice.near_reach = static_cast<float>(
+      nearPlaneReach(choice.near_m, 1.0 / std::max(double(glm::length(glm::vec3(row_x))), 1e-6),
                      1.0 / std::max(double(glm::length(glm::vec3(row_y))), 1e-6)));
+  choice.test = view.pass == InstancePass::Second && view.box_hidden;
+  const float near_reach = choice.near_reach;
 
   s.frame.clear();
   if (view.pass == InstancePass::First) {
@@ -659,122 +893,48 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       if (!s.eye_clear_of_runs) break;
     }
   }
-  const bool test = view.pass == InstancePass::Second && view.box_hidden;
-  // The distance of instance `b` (its centre at `centre`, eye-relative) for its level of detail.
-  auto distanceOf = [&](const InstanceBounds& b, const glm::vec3& centre) {
-    return std::max(double(glm::length(centre)) - b.radius, near_m);
-  };
-  // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye) into
-  // `part`. Called from several threads at once, each with its own part.
-  auto place = [&](ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
-    InstanceLodStats& stats = part.stats;
-    const InstanceBounds& b = s.bounds[i];
-    const double distance = distanceOf(b, anchor_eye + b.centre);
-    const double px_per_m = pixel_scale / distance;
-    const float metres_per_px = static_cast<float>(1.0 / px_per_m);
-    Form form =
-        chooseForm(b, static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px,
-                   static_cast<float>(view.thin_px) * metres_per_px,
-                   static_cast<float>(view.min_thin_px) * metres_per_px);
-    if (form.shape == Shape::None) {
-      ++stats.instances_culled;
-      return;
+  s.frame_clusters.assign(clusters.begin(), clusters.end());
+  // The clusters in runs, one part each; a run's part is its instances in cluster order.
+  const size_t concurrency = size_t(tbb::this_task_arena::max_concurrency());
+  if (view.pass != InstancePass::Second && s.clusters_per_run != 0 &&
+      clusters.size() >= 2 * size_t(s.clusters_per_run)) {
+    // Streamed: the runs are drawn one by one as they are done (Impl::streaming). More runs
+    // than threads, so the first is drawn early and the last is short.
+    const size_t runs = std::clamp<size_t>(clusters.size() / s.clusters_per_run, 2, concurrency * 8);
+    if (s.parts.size() < runs) s.parts.resize(runs);
+    if (s.run_done_capacity < runs) {
+      s.run_done = std::make_unique<std::atomic<uint8_t>[]>(runs);
+      s.run_done_capacity = runs;
     }
-    if (form.shape != Shape::Point && form.shape != Shape::Ribbon)
-      cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, near_reach),
-                    ((b.flags & kRunMember) && s.eye_clear_of_runs) ||
-                        (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, near_reach)));
-    if (view.pass != InstancePass::All) part.drawn.push_back({c, i});
-    ++stats.instances_drawn;
-    if (form.shape == Shape::Profile) {
-      FaceCull cull = FaceCull::None;
-      if ((b.flags & kClosedProfile) && eyeOutsideSolid(b, -anchor_eye, near_reach))
-        cull = (b.flags & kMirrored) ? FaceCull::BackOfCw : FaceCull::BackOfCcw;
-      part.profiles.push_back({c, i, distance, cull});
-      return;
-    }
-    stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
-    if (form.shape == Shape::Ribbon) {
-      if (form.box_frame)
-        s.beamRibbon(part, i, b, anchor_eye, form.long_axis);
-      else
-        s.ribbon(part, i, b, anchor_eye, kLevels[form.a]);
-      return;
-    }
-    if (form.shape == Shape::Point) {
-      // A point is its instance's box centre, which the bounds hold: placed without a unit mesh,
-      // the instance's box or its transform (some 18,000 of the 50M orbit's 47,000 instances a
-      // frame are points).
-      part.indices[kPoints].push_back(static_cast<uint32_t>(part.vertices.size()));
-      part.vertices.push_back({anchor_eye + b.centre, s.view->instances()[i].object, 0u});
-      return;
-    }
-    if (form.shape == Shape::Lathe) {
-      s.lathe(part, i, b, anchor_eye, kLevels[form.a],
-              0.5f * static_cast<float>(std::max(view.tolerance_px, 1e-3)) * metres_per_px);
-      return;
-    }
-    s.expand(part, i, b, anchor_eye, form);
-  };
-  // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
-  auto consider = [&](ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
-    InstanceLodStats& stats = part.stats;
-    const InstanceBounds& b = s.bounds[i];
-    if (!(b.flags & kValid)) return;
-    const glm::vec3 centre = anchor_eye + b.centre;
-    const double px_per_m = pixel_scale / distanceOf(b, centre);
-    bool outside = 2.0 * b.radius * px_per_m < view.min_feature_px;
-    for (const glm::vec4& plane : planes)
-      outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
-    if (outside) {
-      ++stats.instances_culled;
-      return;
-    }
-    if (view.pass == InstancePass::First && s.hidden_last[i]) {
-      part.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
-      return;
-    }
-    if (test) {
-      part.to_test.push_back({c, i});
-      return;
-    }
-    place(part, c, anchor_eye, i);
-  };
-  // The clusters in runs, one part each, expanded on TBB (the GL thread waits for this batch);
-  // a run's part is its instances in cluster order, and the parts are appended in run order.
-  auto expandClusters = [&](ExpandedPart& part, size_t begin, size_t end) {
-    for (size_t k = begin; k < end; ++k) {
-      const uint32_t c = clusters[k];
-      if (c >= records.size() ||
-          records[c].kind != static_cast<uint8_t>(pkg::ClusterKind::Parametric))
-        continue;
-      const pkg::ClusterRecord& record = records[c];
-      if (record.instance_first > s.bounds.size() ||
-          record.instance_count > s.bounds.size() - record.instance_first)
-        continue;
-      const glm::vec3 anchor_eye(clusterAnchor(record) - view.eye);
-      for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
-        consider(part, c, anchor_eye, i);
-    }
-  };
-  const size_t runs =
-      s.clusters_per_run == 0
-          ? 1
-          : std::clamp<size_t>(clusters.size() / s.clusters_per_run, 1,
-                               size_t(tbb::this_task_arena::max_concurrency()) * 4);
+    for (size_t r = 0; r < runs; ++r) s.run_done[r].store(0, std::memory_order_relaxed);
+    s.stream_runs = runs;
+    s.next_run.store(0, std::memory_order_relaxed);
+    s.stream_profiles = &profiles;
+    profiles.clear();
+    s.streaming = true;
+    s.expansion.run([&s] {
+      while (s.claimAndExpand()) {
+      }
+    });
+    InstanceLodStats result;  // the counts come with submit()
+    result.unit_meshes = s.made_count.load(std::memory_order_relaxed);
+    return result;
+  }
+  // Whole: expanded here, on TBB (the GL thread waits for this batch), the parts appended in
+  // run order so the batch is the one a single thread makes.
+  const size_t runs = s.clusters_per_run == 0
+                          ? 1
+                          : std::clamp<size_t>(clusters.size() / s.clusters_per_run, 1, concurrency * 4);
   if (runs == 1) {
-    expandClusters(s.frame, 0, clusters.size());
+    s.expandClusters(s.frame, 0, clusters.size());
   } else {
     if (s.parts.size() < runs) s.parts.resize(runs);
-    tbb::parallel_for(size_t(0), runs, [&](size_t r) {
-      s.parts[r].clear();
-      expandClusters(s.parts[r], clusters.size() * r / runs, clusters.size() * (r + 1) / runs);
-    });
+    tbb::parallel_for(size_t(0), runs, [&](size_t r) { s.expandRun(r, runs); });
     for (size_t r = 0; r < runs; ++r) s.frame.append(s.parts[r]);
   }
   if (view.pass == InstancePass::Second) {
     for (const auto& [c, i] : s.deferred)
-      consider(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+      s.consider(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
     s.deferred.clear();
   }
   // Read in place: place() adds to the part's batch and lists, never to to_test.
@@ -788,7 +948,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
         s.hidden_last[i] = 1;
         ++s.frame.stats.instances_occluded;
       } else {
-        place(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
+        s.place(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);
       }
     }
     s.frame.to_test.clear();
@@ -802,79 +962,43 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
   result.unit_meshes = s.made_count.load(std::memory_order_relaxed);
   return result;
 }
+
 void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
                                       InstanceLodStats& stats) {
   Impl& s = *impl_;
-  ExpandedPart& frame = s.frame;
-  if (frame.vertices.empty() && frame.beam_vertices.empty()) return;
-  // One upload of every batch, then each batch drawn whole or in flushed parts.
-  s.all_indices.clear();
-  std::array<size_t, kBatchCount + 1> first{};
-  for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
-    first[batch] = s.all_indices.size();
-    s.all_indices.insert(s.all_indices.end(), frame.indices[batch].begin(), frame.indices[batch].end());
-  }
-  first[kBatchCount] = s.all_indices.size();
-  // Parts pay where the batch is many small primitives, as a far view's ribbons and points: there
-  // llvmpipe's binning is the work to overlap. A batch of near instances (four or more
-  // primitives each on average) goes whole: every extra scene then reloads and stores the many
-  // tiles its large triangles cover, and on the walked decks parts were 5 % slower.
-  const size_t primitives = frame.indices[kPoints].size() +
-                            (s.all_indices.size() - frame.indices[kPoints].size()) / 3;
-  const bool in_parts =
-      s.primitives_per_flush != 0 && primitives < 4 * std::max<uint64_t>(s.batch_instances, 1);
-  glNamedBufferData(s.vertex_buffer, GLsizeiptr(frame.vertices.size() * sizeof(SmoothVertex)),
-                    frame.vertices.data(), GL_STREAM_DRAW);
-  glNamedBufferData(s.beam_vertex_buffer,
-                    GLsizeiptr(frame.beam_vertices.size() * sizeof(BeamVertex)),
-                    frame.beam_vertices.data(), GL_STREAM_DRAW);
-  glNamedBufferData(s.index_buffer, GLsizeiptr(s.all_indices.size() * sizeof(uint32_t)),
-                    s.all_indices.data(), GL_STREAM_DRAW);
   for (GLuint program : {s.program, s.beam_program}) {
     glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
                               &view_projection[0][0]);
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, object_color_count);
   }
-  glUseProgram(s.program);
-  glBindVertexArray(s.vertex_array);
-  for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
-    const size_t count = first[batch + 1] - first[batch];
-    if (count == 0) continue;
-    if (batch == kBeams) {  // the last batch: vertices and a program of their own
-      glUseProgram(s.beam_program);
-      glBindVertexArray(s.beam_vertex_array);
+  size_t unflushed = 0;
+  if (s.streaming) {
+    // Each run's part as soon as it is done, in run order; waiting for one, expand another.
+    std::vector<ParametricMeshInstance>& profiles = *s.stream_profiles;
+    for (size_t r = 0; r < s.stream_runs; ++r) {
+      while (!s.run_done[r].load(std::memory_order_acquire))
+        if (!s.claimAndExpand()) std::this_thread::yield();
+      ExpandedPart& part = s.parts[r];
+      s.drawPart(part, r, part.stats.instances_drawn - part.profiles.size(), unflushed, stats);
+      s.drawn.insert(s.drawn.end(), part.drawn.begin(), part.drawn.end());
+      s.deferred.insert(s.deferred.end(), part.deferred.begin(), part.deferred.end());
+      profiles.insert(profiles.end(), part.profiles.begin(), part.profiles.end());
+      stats.instances_drawn += part.stats.instances_drawn - part.profiles.size();
+      stats.instances_culled += part.stats.instances_culled;
+      stats.thin_instances += part.stats.thin_instances;
+      stats.instances_occluded += part.stats.instances_occluded;
     }
-    if (batch == kCullCcw || batch == kCullCw) {
-      glEnable(GL_CULL_FACE);
-      glCullFace(GL_BACK);
-      glFrontFace(batch == kCullCw ? GL_CW : GL_CCW);
-    } else {
-      glDisable(GL_CULL_FACE);
-    }
-    const GLenum mode = batch == kPoints ? GL_POINTS : GL_TRIANGLES;
-    // In flushed parts (see in_parts), so the rasterizer threads draw one while this thread
-    // bins the next: the 50M plant's orbit (121,516 triangles a frame) fell from 47.6 to 39.5 ms
-    // (docs/benchmarks.md, "A far view's parametric batch in flushed parts").
-    const size_t vertices_per_primitive = mode == GL_TRIANGLES ? 3 : 1;
-    const size_t part =
-        in_parts ? size_t(s.primitives_per_flush) * vertices_per_primitive : count;
-    for (size_t at = 0; at < count; at += part) {
-      glDrawElements(mode, GLsizei(std::min(part, count - at)), GL_UNSIGNED_INT,
-                     reinterpret_cast<const void*>((first[batch] + at) * sizeof(uint32_t)));
-      if (in_parts) glFlush();
-      ++stats.draw_calls;
-    }
-    if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
-    if (batch == kTwoSided || batch == kBeams) stats.two_sided_triangles += count / 3;
+    s.expansion.wait();
+    s.streaming = false;
+    stats.unit_meshes = s.made_count.load(std::memory_order_relaxed);
+  } else {
+    s.drawPart(s.frame, 0, s.batch_instances, unflushed, stats);
   }
+  if (unflushed != 0) glFlush();
   glDisable(GL_CULL_FACE);
   glFrontFace(GL_CCW);
   glBindVertexArray(0);
   glUseProgram(0);
-  // Drawn once: a second submit without a prepare draws nothing.
-  frame.vertices.clear();
-  frame.beam_vertices.clear();
-  for (auto& list : frame.indices) list.clear();
 }
 
 }  // namespace tw

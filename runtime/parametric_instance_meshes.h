@@ -117,19 +117,22 @@ class ParametricInstanceMeshes {
   InstanceLodStats draw(std::span<const uint32_t> clusters, const InstanceLodView& view,
                         uint32_t object_color_count, std::vector<ParametricMeshInstance>& profiles);
   // The CPU half of draw(): chooses each instance's form and expands the visible ones into the
-  // batch that the next submit() draws. It makes no GL call, so it may run on another thread
-  // while the GL thread submits other draws (the frame loop expands the first pass while the
-  // meshes go to GL). Runs of clusters are expanded on TBB, each into a part of its own, and the
-  // parts appended in order: the GL thread waits for this batch with nothing else to do, and on
-  // the 50M plant's orbit a single thread spent 29 ms here. Never two at once, nor beside
-  // submit() or recordVisible().
+  // batch that the next submit() draws. It makes no GL call. A first or only pass of many
+  // clusters (two runs or more) is streamed: prepare() hands the runs to a TBB worker and
+  // returns, and submit() draws each run as soon as it is done (expanding runs itself while it
+  // waits), so llvmpipe's work on the GL thread overlaps the expansion; its counts then come
+  // with submit(), and `profiles` is complete when submit() returns. Otherwise (a second pass,
+  // or few clusters) the runs are expanded here on TBB, each into a part of its own, and the
+  // parts appended in order into one batch. Never two at once (a prepare() not submitted is
+  // finished by the next), nor beside submit() or recordVisible().
   InstanceLodStats prepare(std::span<const uint32_t> clusters, const InstanceLodView& view,
                            std::vector<ParametricMeshInstance>& profiles);
-  // The GL half: uploads the prepared batch and draws it, adding its draw calls and triangles
-  // to `stats`. A batch is drawn once. A far view's (fewer than four primitives an instance) is
-  // drawn in parts, each followed by a glFlush: llvmpipe's rasterizer threads start on a scene
+  // The GL half: uploads the prepared batch (or each streamed run) and draws it, adding its
+  // draw calls and triangles, and a streamed prepare's counts, to `stats`. A batch is drawn
+  // once. A far view's (fewer than four primitives an instance) is drawn in parts, a glFlush
+  // after every primitives_per_flush of them: llvmpipe's rasterizer threads start on a scene
   // only when it is flushed, and until then the submitting thread shades and bins every vertex
-  // of the batch alone (docs/runtime.md, "Overlap"). A near view's is drawn whole.
+  // alone (docs/runtime.md, "Overlap"). A near view's is drawn whole.
   void submit(const glm::mat4& view_projection, uint32_t object_color_count, InstanceLodStats& stats);
 
   // After the frame's final-depth pyramid: marks which instances drawn this frame (both passes)

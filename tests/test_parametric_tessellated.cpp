@@ -747,10 +747,11 @@ TEST_F(ParametricRendering, PreparedOnAnotherThreadDrawsTheSameAsADraw) {
   EXPECT_EQ(dropped_stats.mesh_triangles, plain_stats.mesh_triangles);
 }
 
-// prepare() expands the frame's clusters in runs on TBB, each into a part of its own, and
-// appends the parts in order: the frame must be the one a single run draws, pixel for pixel and
-// count for count, with occlusion's two passes too. Every form is there: closed and open
-// surfaces, boxes, profiles, lathes, ribbons and points.
+// prepare() expands the frame's clusters in runs, each into a part of its own: a first or only
+// pass's runs streamed (a worker expands them while submit() draws each as it is done), a second
+// pass's appended in order into one batch. The frame must be the one a single run draws, pixel
+// for pixel and count for count, with occlusion's two passes too. Every form is there: closed
+// and open surfaces, boxes, profiles, lathes, ribbons and points.
 TEST_F(ParametricRendering, ExpandedInRunsDrawsWhatOneRunDraws) {
   std::vector<Part> parts = typeCaseRow();
   auto id = static_cast<uint32_t>(parts.size() + 1);
