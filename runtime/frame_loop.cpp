@@ -8,7 +8,6 @@
 #include <cmath>
 #include <stdexcept>
 
-#include <tbb/task_group.h>
 
 namespace tw {
 
