@@ -8,7 +8,6 @@
 #include <cmath>
 #include <stdexcept>
 
-
 namespace tw {
 
 namespace {
