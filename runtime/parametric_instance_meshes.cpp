@@ -625,8 +625,8 @@ struct ParametricInstanceMeshes::Impl {
   // `axis` facing the eye, as wide as the box's cross-section seen from there, each side of the
   // line where the two long faces the eye sees meet shaded with its face's normal (the
   // fragments choose, parametricBeamFragmentShader). Two triangles show what the box's six to
-  // twelve would, but for its end faces; two bands of two, one a face, cost llvmpipe 8 % more
-  // on the 50M plant's orbit (docs/benchmarks.md).
+  // twelve would, but for its end faces; two bands of two, one a face, made the 50M plant's
+  // orbit 20 % slower (docs/benchmarks.md, "Thin beams in one band").
   void beamRibbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b,
                   const glm::vec3& anchor_eye, int axis) {
     const pkg::InstanceRecord& in = view->instances()[i];
