@@ -4,9 +4,11 @@
 // pvs filters the cut through a view cell's visible set; off draws the whole cut.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <thread>
 
 #include "camera_test_support.h"
 #include "egl_context.h"
@@ -102,17 +104,23 @@ WalkthroughOptions smallOptions(OcclusionMode mode) {
   return options;
 }
 
-// Renders until nothing has been missing (every page the cut wants resident) for three frames
-// in a row, or 200 frames. One complete frame is not enough: on the frame the last pages arrive
-// the cut changes, none of it was visible the frame before, and without the final-depth rebuild
-// the whole cut is next frame's pass 1; the frame after that is the steady one.
+// Renders until nothing has been missing (every page the cut wants resident) and the pager has
+// been idle (nothing queued, loading or waiting for upload) for three frames in a row, or 2,000
+// frames. One complete frame is not enough: on the frame the last pages arrive the cut changes,
+// none of it was visible the frame before, and without the final-depth rebuild the whole cut is
+// next frame's pass 1; the frame after that is the steady one. The pager must be idle too, because
+// pages wanted outside the cut (a cell's occluders) leave the queue while a loader still decodes
+// them, and a loaded machine may take many frames to finish.
 FrameStats settle(Walkthrough& walk, const Camera& camera) {
   FrameStats stats;
   int complete_frames = 0;
-  for (int i = 0; i < 200 && complete_frames < 3; ++i) {
+  for (int i = 0; i < 2000 && complete_frames < 3; ++i) {
     stats = walk.renderFrame(camera, 0.0);
-    const bool complete = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0;
+    const PagerStats pager = walk.pager().stats();
+    const bool idle = pager.pages_requested + pager.pages_loading + pager.pages_ready == 0;
+    const bool complete = stats.ancestor_fallbacks == 0 && idle;
     complete_frames = complete ? complete_frames + 1 : 0;
+    if (!idle) std::this_thread::sleep_for(std::chrono::milliseconds(1));  // let the loaders run
   }
   return stats;
 }
