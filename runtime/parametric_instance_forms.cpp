@@ -157,7 +157,8 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), tolerance));
       if (2.0f * b.size[1] < thin) {
         // The ribbon is narrower than its chords' sag could be at the tolerance: a quarter of it,
-        // and straddling chords (ribbon()), keep it within an eighth of the true centre circle.
+        // and straddling chords (appendTubeRibbon), keep it within an eighth of the true centre
+        // circle.
         f.shape = Shape::Ribbon;
         f.a = levelIndex(arcSegments(b.size[0], std::min(b.size[2], float(kTwoPi)), 0.25f * tolerance));
         across = 2.0f * b.size[1];
@@ -176,7 +177,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       f.shape = thin_axes == 3 ? Shape::Point : surfaceOf(b.type);
       if (thin_axes == 2) {
         // A beam thinner than a pixel both ways across: a ribbon along its longest axis, as
-        // wide as its cross-section seen from the eye (beamRibbon), the silhouette its box
+        // wide as its cross-section seen from the eye (appendBeamRibbon), the silhouette its box
         // would show, in two triangles instead of six to twelve, each fragment shaded with the
         // face under it.
         for (int axis = 0; axis < 3; ++axis)

@@ -28,11 +28,10 @@
 
 #include "camera.h"
 #include "gl_program.h"
+#include "parametric_instance_expansion.h"
 #include "parametric_instance_forms.h"
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
-#include "parametric_unit_meshes.h"
-#include "profile_simplifier.h"
 #include "sealed_pipe_runs.h"
 #include "tessellate.h"
 
@@ -40,91 +39,19 @@ namespace tw {
 
 using namespace instance_forms;
 
-namespace {
-
-// A unit-mesh point `q` of a primitive with parameters `p`, in its canonical frame (scene.h).
-glm::vec3 shapedPoint(pkg::PrimitiveType type, const float* p, const glm::vec4& q) {
-  const float rim = std::min(q.w, 1.0f);  // tubes: 0 at a cap centre
-  switch (type) {
-    case pkg::PrimitiveType::Cylinder: return {rim * p[0] * q.x, rim * p[0] * q.y, q.z * p[1]};
-    case pkg::PrimitiveType::Cone: {
-      const float r = rim * (p[0] + (p[1] - p[0]) * q.z);
-      return {r * q.x, r * q.y, q.z * p[2]};
-    }
-    case pkg::PrimitiveType::Sphere: return p[0] * glm::vec3(q.z * q.x, q.z * q.y, q.w);
-    case pkg::PrimitiveType::TorusSegment: {
-      const float a = q.x * p[2], rho = p[0] + p[1] * q.y;
-      return {rho * std::cos(a), rho * std::sin(a), p[1] * q.z};
-    }
-    case pkg::PrimitiveType::Box: return glm::vec3(q) * glm::vec3(p[0], p[1], p[2]);
-    default: return glm::vec3(0.0f);  // profiles are drawn in the box frame only
-  }
-}
-
-// The surface normal at unit-mesh point `q` in the canonical frame (not normalized for cones);
-// zero where the surface is flat there (caps, boxes) or for lines and points.
-glm::vec3 shapedNormal(pkg::PrimitiveType type, Shape shape, const float* p, const glm::vec4& q) {
-  switch (shape) {
-    case Shape::Tube:
-      if (q.w != 1.0f) return glm::vec3(0.0f);
-      if (type == pkg::PrimitiveType::Cone) {
-        const glm::vec2 c = glm::vec2(q) / std::max(glm::length(glm::vec2(q)), 1e-30f);
-        return {p[2] * c.x, p[2] * c.y, p[0] - p[1]};
-      }
-      return {q.x, q.y, 0.0f};
-    case Shape::Sphere: return {q.z * q.x, q.z * q.y, q.w};
-    case Shape::Torus: {
-      const float a = q.x * p[2];
-      return {q.y * std::cos(a), q.y * std::sin(a), q.z};
-    }
-    default: return glm::vec3(0.0f);
-  }
-}
-
-}  // namespace
-
-// One vertex of the per-frame batch: 20 bytes.
-struct SmoothVertex {
-  glm::vec3 position;  // metres from the eye
-  uint32_t object;     // object index
-  uint32_t normal;     // packNormal
-};
-
-// One vertex of a thin beam's band (beamRibbon): 28 bytes.
-struct BeamVertex {
-  glm::vec3 position;  // metres from the eye
-  uint32_t object;     // object index
-  uint32_t normal_u;   // packNormal: the first long face's
-  uint32_t normal_w;   // and the second's
-  float across;        // signed metres from the edge where the faces meet (< 0: first face)
-};
-
-// A unit mesh with arrays of its own (base_vertex and first_index 0), so that threads expanding
-// instances read it while another thread makes a mesh they have not met yet.
-struct OwnedUnitMesh {
-  UnitMesh mesh;
-  std::vector<glm::vec4> shapes;
-  std::vector<uint32_t> indices;
-};
-
 // What expanding a run of clusters produces: prepare() splits the frame's clusters into runs
 // expanded on TBB, each into a part of its own, and appends the parts in cluster order, so the
 // batch is the one a single thread makes.
 struct ExpandedPart {
-  std::vector<SmoothVertex> vertices;
-  std::vector<BeamVertex> beam_vertices;  // indexed by indices[kBeams]
-  std::array<std::vector<uint32_t>, kBatchCount> indices;
+  InstanceBatch batch;
   // Drawn (both passes), hidden last frame (first pass), to test (second pass): cluster, instance.
   std::vector<std::pair<uint32_t, uint32_t>> drawn, deferred, to_test;
   std::vector<ParametricMeshInstance> profiles;
   InstanceLodStats stats;
-  std::vector<glm::vec2> kept, ring;  // lathe scratch
-  ProfileSimplifier simplifier;
+  LatheScratch lathe;
 
   void clear() {
-    vertices.clear();
-    beam_vertices.clear();
-    for (auto& list : indices) list.clear();
+    batch.clear();
     drawn.clear();
     deferred.clear();
     to_test.clear();
@@ -133,14 +60,7 @@ struct ExpandedPart {
   }
   // Appends `part` after this one's contents.
   void append(const ExpandedPart& part) {
-    const auto base = static_cast<uint32_t>(vertices.size());
-    const auto beam_base = static_cast<uint32_t>(beam_vertices.size());
-    vertices.insert(vertices.end(), part.vertices.begin(), part.vertices.end());
-    beam_vertices.insert(beam_vertices.end(), part.beam_vertices.begin(), part.beam_vertices.end());
-    for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
-      const uint32_t offset = batch == kBeams ? beam_base : base;
-      for (uint32_t index : part.indices[batch]) indices[batch].push_back(offset + index);
-    }
+    batch.append(part.batch);
     drawn.insert(drawn.end(), part.drawn.begin(), part.drawn.end());
     deferred.insert(deferred.end(), part.deferred.begin(), part.deferred.end());
     to_test.insert(to_test.end(), part.to_test.begin(), part.to_test.end());
@@ -315,27 +235,28 @@ struct ParametricInstanceMeshes::Impl {
       return;
     }
     stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
+    const pkg::InstanceRecord& in = view->instances()[i];
     if (form.shape == Shape::Ribbon) {
       if (form.box_frame)
-        beamRibbon(part, i, b, anchor_eye, form.long_axis);
+        appendBeamRibbon(part.batch, in, view->profilePoints(), b, anchor_eye, form.long_axis);
       else
-        ribbon(part, i, b, anchor_eye, kLevels[form.a]);
+        appendTubeRibbon(part.batch, in, b, anchor_eye, kLevels[form.a]);
       return;
     }
     if (form.shape == Shape::Point) {
       // A point is its instance's box centre, which the bounds hold: placed without a unit mesh,
       // the instance's box or its transform (some 18,000 of the 50M orbit's 47,000 instances a
       // frame are points).
-      part.indices[kPoints].push_back(static_cast<uint32_t>(part.vertices.size()));
-      part.vertices.push_back({anchor_eye + b.centre, view->instances()[i].object, 0u});
+      appendPoint(part.batch, in.object, anchor_eye + b.centre);
       return;
     }
     if (form.shape == Shape::Lathe) {
-      lathe(part, i, b, anchor_eye, kLevels[form.a],
-            0.5f * static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px);
+      appendLathe(part.batch, part.lathe, in, view->profilePoints(), b, anchor_eye, kLevels[form.a],
+                  0.5f * static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px);
       return;
     }
-    expand(part, i, b, anchor_eye, form);
+    appendSurface(part.batch, in, view->profilePoints(), b, anchor_eye, form,
+                  unitMesh(form.shape, form.a, form.b));
   }
 
   // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
@@ -402,7 +323,7 @@ struct ParametricInstanceMeshes::Impl {
   // thread shades and bins every vertex alone (docs/runtime.md, "Overlap"). A near view's
   // (four or more primitives an instance) goes whole: every extra scene then reloads and stores
   // the many tiles its large triangles cover, and on the walked decks parts were 5 % slower.
-  void drawPart(ExpandedPart& part, size_t set_index, uint64_t part_instances, size_t& unflushed,
+  void drawPart(InstanceBatch& part, size_t set_index, uint64_t part_instances, size_t& unflushed,
                 InstanceLodStats& stats) {
     if (part.vertices.empty() && part.beam_vertices.empty()) return;
     all_indices.clear();
@@ -412,8 +333,7 @@ struct ParametricInstanceMeshes::Impl {
       all_indices.insert(all_indices.end(), part.indices[batch].begin(), part.indices[batch].end());
     }
     first[kBatchCount] = all_indices.size();
-    const size_t primitives = part.indices[kPoints].size() +
-                              (all_indices.size() - part.indices[kPoints].size()) / 3;
+    const size_t primitives = part.primitives();
     const bool in_parts =
         primitives_per_flush != 0 && primitives < 4 * std::max<uint64_t>(part_instances, 1);
     const BufferSet& set = bufferSet(set_index);
@@ -465,9 +385,7 @@ struct ParametricInstanceMeshes::Impl {
       if (mode == GL_TRIANGLES) stats.triangles_drawn += count / 3;
       if (batch == kTwoSided || batch == kBeams) stats.two_sided_triangles += count / 3;
     }
-    part.vertices.clear();
-    part.beam_vertices.clear();
-    for (auto& list : part.indices) list.clear();
+    part.clear();
   }
 
   // Safe to call from several threads at once: a mesh is made once, under the mutex, and read
@@ -478,260 +396,11 @@ struct ParametricInstanceMeshes::Impl {
     if (const OwnedUnitMesh* mesh = slot.load(std::memory_order_acquire)) return *mesh;
     std::lock_guard lock(unit_mutex);
     if (const OwnedUnitMesh* mesh = slot.load(std::memory_order_relaxed)) return *mesh;
-    UnitMeshBuilder builder;
-    UnitMesh m;
-    switch (shape) {
-      case Shape::Tube: m = builder.tube(kLevels[a]); break;
-      case Shape::Sphere: m = builder.sphere(kLevels[a], kLevels[b]); break;
-      case Shape::Torus: m = builder.torus(kLevels[a], kLevels[b]); break;
-      case Shape::Box: m = builder.box(); break;
-      case Shape::Point:  // the box centre, placed from the bounds (prepare)
-      case Shape::Profile:
-      case Shape::Lathe:
-      case Shape::Ribbon:
-      case Shape::None: break;  // never expanded from a unit mesh
-    }
-    m.vertex_count = static_cast<uint32_t>(builder.shapes.size()) - m.base_vertex;
-    auto owned = std::make_unique<OwnedUnitMesh>();
-    owned->mesh = m;
-    owned->shapes = std::move(builder.shapes);
-    owned->indices = std::move(builder.indices);
+    auto owned = std::make_unique<OwnedUnitMesh>(makeUnitMesh(shape, a, b));
     made.push_back(std::move(owned));
     made_count.store(static_cast<uint32_t>(made.size()), std::memory_order_relaxed);
     slot.store(made.back().get(), std::memory_order_release);
     return *made.back();
-  }
-
-  // Appends revolution `i` swept over `segments` steps (a full turn's count; a partial sweep gets
-  // its share, at least one), its profile simplified to `profile_tolerance` metres: flat bands
-  // between the kept profile points, two-sided (no normals: faceted like the reference).
-  void lathe(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
-             uint32_t segments, float profile_tolerance) {
-    std::vector<SmoothVertex>& vertices = part.vertices;
-    std::vector<glm::vec2>& kept = part.kept;
-    std::vector<glm::vec2>& ring = part.ring;
-    const pkg::InstanceRecord& in = view->instances()[i];
-    const auto all_points = view->profilePoints();
-    if (in.profile_count < 2 || in.profile_first > all_points.size() ||
-        in.profile_count > all_points.size() - in.profile_first)
-      return;
-    const auto profile = all_points.subspan(in.profile_first, in.profile_count);
-    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
-    const float scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
-    part.simplifier.simplify(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
-    const float sweep = in.params[0];
-    const bool full = !(sweep < float(kTwoPi) * (1.0f - 1e-5f));
-    const uint32_t steps =
-        full ? segments
-             : std::max(1u, uint32_t(std::ceil(double(segments) * double(sweep) / kTwoPi)));
-    const uint32_t columns = full ? steps : steps + 1;
-    ring.resize(columns);
-    for (uint32_t c = 0; c < columns; ++c) {
-      const double a = (full ? kTwoPi : double(sweep)) * c / steps;
-      ring[c] = {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a))};
-    }
-    const glm::vec3 origin = anchor_eye + b.origin;
-    std::vector<uint32_t>& out = part.indices[kTwoSided];
-    uint32_t previous_first = 0;
-    bool previous_on_axis = false;
-    for (size_t j = 0; j < kept.size(); ++j) {
-      const glm::vec2 q = kept[j];
-      const bool on_axis = q.x == 0.0f;
-      const uint32_t first = static_cast<uint32_t>(vertices.size());
-      if (on_axis) {
-        vertices.push_back({origin + linear * glm::vec3(0.0f, 0.0f, q.y), in.object, 0u});
-      } else {
-        for (const glm::vec2& cs : ring)
-          vertices.push_back({origin + linear * glm::vec3(q.x * cs.x, q.x * cs.y, q.y), in.object, 0u});
-      }
-      if (j > 0 && !(previous_on_axis && on_axis)) {
-        for (uint32_t c = 0; c < steps; ++c) {
-          const uint32_t c1 = full ? (c + 1) % columns : c + 1;
-          const uint32_t a = previous_first + (previous_on_axis ? 0 : c);
-          const uint32_t b1 = previous_first + (previous_on_axis ? 0 : c1);
-          const uint32_t c2 = first + (on_axis ? 0 : c1), d = first + (on_axis ? 0 : c);
-          if (!previous_on_axis) out.insert(out.end(), {a, b1, c2});
-          if (!on_axis) out.insert(out.end(), {a, c2, d});
-        }
-      }
-      previous_first = first;
-      previous_on_axis = on_axis;
-    }
-  }
-
-  // Appends tube or elbow `i`, thinner than a pixel, as its silhouette: a band along the axis
-  // (the centre circle in `segments` steps over its sweep) facing the eye, as wide as the tube's
-  // cross-section seen from there, shaded with the normal of the tube's line nearest the eye.
-  // Its two triangles cover the pixel centres the full-resolution tube would, where a one-pixel
-  // line covered a whole pixel row along a tube a fifth of a pixel thick.
-  void ribbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
-              uint32_t segments) {
-    std::vector<SmoothVertex>& vertices = part.vertices;
-    const pkg::InstanceRecord& in = view->instances()[i];
-    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
-    const glm::vec3 origin = anchor_eye + b.origin;
-    const float* p = in.params;
-    const auto type = static_cast<pkg::PrimitiveType>(in.type);
-    // One cross-section: its centre, the axis direction there and the circle's two radii
-    // (canonical frame).
-    auto section = [&](const glm::vec3& centre, const glm::vec3& along, const glm::vec3& u,
-                       const glm::vec3& w, float radius) {
-      const glm::vec3 at = origin + linear * centre;
-      const glm::vec3 tangent = glm::normalize(linear * along);
-      const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
-      glm::vec3 side = glm::cross(tangent, to_eye);
-      if (glm::length(side) < 1e-6f)  // seen along its axis: a dot, any side will do
-        side = glm::cross(tangent, std::abs(tangent.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
-      side = glm::normalize(side);
-      // The circle radius * (cos t * u + sin t * w), mapped, reaches this far along `side`.
-      const float half = radius * std::hypot(glm::dot(linear * u, side), glm::dot(linear * w, side));
-      const glm::vec3 facing = to_eye - glm::dot(to_eye, tangent) * tangent;
-      const float facing_length = glm::length(facing);
-      const uint32_t normal = packNormal(facing_length > 1e-6f ? facing / facing_length : to_eye);
-      vertices.push_back({at - half * side, in.object, normal});
-      vertices.push_back({at + half * side, in.object, normal});
-    };
-    const uint32_t base = static_cast<uint32_t>(vertices.size());
-    uint32_t steps = 1;
-    if (type == pkg::PrimitiveType::TorusSegment) {
-      // Centre circle of radius p[0] in the canonical xy plane, swept p[2] radians in `segments`
-      // chords that straddle the circle, as the rings do.
-      const float sweep = p[2];
-      steps = std::max(segments, 1u);
-      const float centre_radius = p[0] * 2.0f / (1.0f + std::cos(0.5f * sweep / float(steps)));
-      for (uint32_t k = 0; k <= steps; ++k) {
-        const float a = sweep * float(k) / float(steps);
-        const glm::vec3 radial(std::cos(a), std::sin(a), 0.0f);
-        section(centre_radius * radial, {-radial.y, radial.x, 0.0f}, radial, {0.0f, 0.0f, 1.0f}, p[1]);
-      }
-    } else {  // cylinder (radius p[0], height p[1]) or cone (radii p[0], p[1], height p[2])
-      const bool cone = type == pkg::PrimitiveType::Cone;
-      const float height = cone ? p[2] : p[1];
-      section({0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f}, p[0]);
-      section({0.0f, 0.0f, height}, {0.0f, 0.0f, 1.0f}, {1.0f, 0.0f, 0.0f}, {0.0f, 1.0f, 0.0f},
-              cone ? p[1] : p[0]);
-    }
-    std::vector<uint32_t>& out = part.indices[kTwoSided];
-    for (uint32_t k = 0; k < steps; ++k) {
-      const uint32_t a = base + 2 * k;
-      out.insert(out.end(), {a, a + 1, a + 3, a, a + 3, a + 2});
-    }
-  }
-
-  // Appends box-framed instance `i` (a box, or an extrusion or revolution by its box) thinner
-  // than a pixel across its two shorter axes as its silhouette: a band along the longest axis
-  // `axis` facing the eye, as wide as the box's cross-section seen from there, each side of the
-  // line where the two long faces the eye sees meet shaded with its face's normal (the
-  // fragments choose, parametricBeamFragmentShader). Two triangles show what the box's six to
-  // twelve would, but for its end faces; two bands of two, one a face, made the 50M plant's
-  // orbit 20 % slower (docs/benchmarks.md, "Thin beams in one band").
-  void beamRibbon(ExpandedPart& part, uint32_t i, const InstanceBounds& b,
-                  const glm::vec3& anchor_eye, int axis) {
-    const pkg::InstanceRecord& in = view->instances()[i];
-    glm::vec3 lo, hi;
-    if (!instanceLocalBox(in, view->profilePoints(), lo, hi)) return;
-    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
-    const glm::vec3 half = 0.5f * (hi - lo);
-    const glm::vec3 axes[3] = {linear[0] * half.x, linear[1] * half.y, linear[2] * half.z};
-    const glm::vec3 along = axes[axis];
-    glm::vec3 u = axes[(axis + 1) % 3], w = axes[(axis + 2) % 3];
-    const float along_length = glm::length(along);
-    if (!(along_length > 0.0f)) return;
-    const glm::vec3 tangent = along / along_length;
-    const glm::vec3 centre = anchor_eye + b.centre;
-    // Outward unit normals of the long faces at +u and at +w (the axes need not be orthogonal);
-    // then u and w turned toward the eye, so the faces at +u and +w are the ones it sees.
-    auto outward = [](const glm::vec3& n, const glm::vec3& toward) {
-      const float length = glm::length(n);
-      if (!(length > 0.0f)) return glm::vec3(0.0f);
-      return (glm::dot(n, toward) < 0.0f ? -n : n) / length;
-    };
-    glm::vec3 n_u = outward(glm::cross(along, w), u), n_w = outward(glm::cross(along, u), w);
-    if (glm::dot(n_u, -centre) < 0.0f) {
-      u = -u;
-      n_u = -n_u;
-    }
-    if (glm::dot(n_w, -centre) < 0.0f) {
-      w = -w;
-      n_w = -n_w;
-    }
-    const uint32_t packed_u = packNormal(n_u), packed_w = packNormal(n_w);
-    std::vector<BeamVertex>& vertices = part.beam_vertices;
-    // One cross-section: across `side`, the face at +u spans the edges u - w and u + w, the face
-    // at +w the edges u + w and w - u; the outer edges are the silhouette, and `across` is zero
-    // at the shared edge u + w.
-    auto section = [&](const glm::vec3& at) {
-      const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
-      glm::vec3 side = glm::cross(tangent, to_eye);
-      if (glm::length(side) < 1e-6f)  // seen along its axis: any side will do
-        side = glm::cross(tangent, std::abs(tangent.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
-      side = glm::normalize(side);
-      const float shared = glm::dot(u + w, side);
-      const float u_outer = glm::dot(u - w, side), w_outer = glm::dot(w - u, side);
-      vertices.push_back({at + u_outer * side, in.object, packed_u, packed_w, -std::abs(shared - u_outer)});
-      vertices.push_back({at + w_outer * side, in.object, packed_u, packed_w, std::abs(w_outer - shared)});
-    };
-    const auto base = static_cast<uint32_t>(vertices.size());
-    section(centre - along);
-    section(centre + along);
-    // Outer edge of the first face at each end (base, base + 2), of the second (base + 1, + 3).
-    part.indices[kBeams].insert(part.indices[kBeams].end(),
-                                {base, base + 1, base + 3, base, base + 3, base + 2});
-  }
-
-  // Appends instance `i` in form `f` to its batch, positions relative to the eye.
-  void expand(ExpandedPart& part, uint32_t i, const InstanceBounds& b, const glm::vec3& anchor_eye,
-              const Form& f) {
-    std::vector<SmoothVertex>& vertices = part.vertices;
-    const pkg::InstanceRecord& in = view->instances()[i];
-    const OwnedUnitMesh& owned = unitMesh(f.shape, f.a, f.b);
-    const UnitMesh& mesh = owned.mesh;
-    const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                           in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
-    const uint32_t base = static_cast<uint32_t>(vertices.size());
-    const uint32_t vertex_count = mesh.vertex_count;
-    if (f.box_frame) {
-      glm::vec3 lo, hi;
-      if (!instanceLocalBox(in, view->profilePoints(), lo, hi)) return;
-      const glm::vec3 centre = anchor_eye + b.centre, half = 0.5f * (hi - lo);
-      const glm::mat3 half_axes(linear[0] * half.x, linear[1] * half.y, linear[2] * half.z);
-      for (uint32_t v = 0; v < vertex_count; ++v)
-        vertices.push_back(
-            {centre + half_axes * glm::vec3(owned.shapes[mesh.base_vertex + v]), in.object, 0u});
-    } else {
-      const glm::vec3 origin = anchor_eye + b.origin;
-      const auto type = static_cast<pkg::PrimitiveType>(in.type);
-      const glm::mat3 normal_matrix = normalMatrix(linear);  // scale normalized away below
-      for (uint32_t v = 0; v < vertex_count; ++v) {
-        const glm::vec4& q = owned.shapes[mesh.base_vertex + v];
-        const glm::vec3 n = normal_matrix * shapedNormal(type, f.shape, in.params, q);
-        const float length = glm::length(n);
-        vertices.push_back({origin + linear * shapedPoint(type, in.params, q), in.object,
-                            packNormal(length > 1e-20f ? n / length : glm::vec3(0.0f))});
-      }
-    }
-    const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
-    std::vector<uint32_t>& out = part.indices[f.batch];
-    const uint32_t* unit = owned.indices.data() + mesh.first_index;
-    if (f.batch == kTwoSided || f.batch == kPoints) {
-      for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit[k]);
-      return;
-    }
-    // A closed surface seen from outside: its back faces are left out here, where the eye-relative
-    // positions make the test one dot product, instead of being shaded, set up and then culled
-    // by llvmpipe on the render thread. The plane test is the rasterizer's own (the eye behind
-    // the triangle's plane); edge-on triangles are kept.
-    const float front = f.batch == kCullCw ? -1.0f : 1.0f;
-    for (uint32_t k = 0; k + 2 < count; k += 3) {
-      const glm::vec3& a = vertices[base + unit[k]].position;
-      const glm::vec3& b1 = vertices[base + unit[k + 1]].position;
-      const glm::vec3& c1 = vertices[base + unit[k + 2]].position;
-      if (front * glm::dot(glm::cross(b1 - a, c1 - a), a) > 0.0f) continue;  // eye behind it
-      out.insert(out.end(), {base + unit[k], base + unit[k + 1], base + unit[k + 2]});
-    }
   }
 };
 
@@ -979,7 +648,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       while (!s.run_done[r].load(std::memory_order_acquire))
         if (!s.claimAndExpand()) std::this_thread::yield();
       ExpandedPart& part = s.parts[r];
-      s.drawPart(part, r, part.stats.instances_drawn - part.profiles.size(), unflushed, stats);
+      s.drawPart(part.batch, r, part.stats.instances_drawn - part.profiles.size(), unflushed, stats);
       s.drawn.insert(s.drawn.end(), part.drawn.begin(), part.drawn.end());
       s.deferred.insert(s.deferred.end(), part.deferred.begin(), part.deferred.end());
       profiles.insert(profiles.end(), part.profiles.begin(), part.profiles.end());
@@ -992,7 +661,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
     s.streaming = false;
     stats.unit_meshes = s.made_count.load(std::memory_order_relaxed);
   } else {
-    s.drawPart(s.frame, 0, s.batch_instances, unflushed, stats);
+    s.drawPart(s.frame.batch, 0, s.batch_instances, unflushed, stats);
   }
   if (unflushed != 0) glFlush();
   glDisable(GL_CULL_FACE);

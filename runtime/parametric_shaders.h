@@ -395,11 +395,12 @@ void main() {
 )";
 }
 
-// Thin beams drawn per instance as their silhouette (parametric_instance_meshes.h, beamRibbon):
-// one band of two triangles facing the eye, across the two long faces the eye sees. Each vertex
-// carries both faces' normals and `across`, negative on the first face's side of the edge where
-// the faces meet and positive on the second's, so the fragments on either side of that edge are
-// shaded with their own face's normal, as two bands of two triangles each would be.
+// Thin beams drawn per instance as their silhouette (appendBeamRibbon in
+// parametric_instance_expansion.h): one band of two triangles facing the eye, across the two long
+// faces the eye sees. Each vertex carries both faces' normals and `across`, negative on the first
+// face's side of the edge where the faces meet and positive on the second's, so the fragments on
+// either side of that edge are shaded with their own face's normal, as two bands of two triangles
+// each would be.
 inline std::string parametricBeamVertexShader() {
   return std::string(R"(#version 450 core
 layout(location = 0) in vec3 position;  // metres from the eye

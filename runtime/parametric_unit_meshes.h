@@ -24,7 +24,7 @@ struct UnitMesh {
   uint32_t base_vertex = 0, vertex_count = 0, first_index = 0, side_indices = 0, all_indices = 0;
 };
 
-// Builds the unit meshes: points of a shape (shapedPoint, in parametric_instance_meshes.cpp, gives
+// Builds the unit meshes: points of a shape (shapedPoint, in parametric_instance_expansion.cpp, gives
 // them the instance's parameters).
 // Rows and columns follow formats/primitive_tessellation.cpp, and every triangle is
 // counter-clockwise seen from outside.
