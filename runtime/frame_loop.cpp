@@ -153,6 +153,7 @@ void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats
     stats->parametric_two_sided_triangles += drawn.two_sided_triangles;
     stats->parametric_thin_instances += drawn.thin_instances;
     stats->parametric_occluded += drawn.instances_occluded;
+    stats->parametric_instances_tested += drawn.instances_tested;
     stats->parametric_cpu_ms += drawn.cpu_ms;
   }
 }

@@ -34,6 +34,9 @@ struct FrameStats {
   // hzb, tessellated mode: instances of drawn clusters not drawn because their own box was
   // hidden (parametric_instance_meshes.h, "Occlusion").
   uint64_t parametric_occluded = 0;
+  // Tessellated mode: instances of drawn clusters tested one by one; the others were too small
+  // at their distance to show (InstanceScaleIndex) and never looked at.
+  uint64_t parametric_instances_tested = 0;
   uint32_t pages_resident = 0;
   uint32_t pages_requested = 0;     // in the queue at the end of the frame
   uint32_t pages_loaded = 0;        // uploaded this frame

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 
 #include "parametric_meshes.h"
 #include "parametric_unit_meshes.h"
@@ -207,6 +208,58 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
   if (f.shape != Shape::Tube) f.capped = false;
   if (f.shape == Shape::Point) f.batch = kPoints;  // a ribbon faces the eye: two-sided
   return f;
+}
+
+// Derived from chooseForm's rules with k the scale, thin = thin_px / k, min_thin = min_thin_px / k
+// (mt = min_thin_px <= t = thin_px):
+// - a tube of diameter D and length H is a surface or a ribbon as wide as D while H k >= t or
+//   D k >= t, a point as long as max(D, H) otherwise: shown from mt / D, and as a point over
+//   [mt / H, t / H);
+// - a sphere of diameter D and a torus of tube diameter D: from mt / D;
+// - a box (extrusion, revolution) with doubled half-extents L >= M >= S is a point as long as L
+//   below t / L, a ribbon as wide as M up to t / M, a surface above: shown from
+//   max(t / L, mt / M), and as a point over [mt / L, t / L);
+// and nothing shows below min_feature_px / (2 r), r the bounding sphere's radius.
+ShownScales shownScales(const InstanceBounds& b, double thin_px, double min_thin_px,
+                        double min_feature_px) {
+  ShownScales s;
+  if (!(b.flags & kValid)) return s;
+  const double t = thin_px, mt = std::min(min_thin_px, thin_px);
+  // A thin form of zero width is never left out (chooseForm leaves out only widths above zero).
+  auto over = [](double px, double metres) { return metres > 0.0 ? px / metres : 0.0; };
+  switch (surfaceOf(b.type)) {
+    case Shape::Tube: {
+      const double diameter = 2.0 * double(b.size[0]), length = b.size[1];
+      s.from = over(mt, diameter);
+      s.gap_from = over(mt, length);
+      s.gap_to = over(t, length);
+      break;
+    }
+    case Shape::Sphere: s.from = over(mt, 2.0 * double(b.size[0])); break;
+    case Shape::Torus: s.from = over(mt, 2.0 * double(b.size[1])); break;
+    default: {
+      std::array<double, 3> sizes = {2.0 * double(b.size[0]), 2.0 * double(b.size[1]),
+                                     2.0 * double(b.size[2])};
+      std::sort(sizes.begin(), sizes.end(), std::greater<>());
+      s.from = std::max(over(t, sizes[0]), over(mt, sizes[1]));
+      s.gap_from = over(mt, sizes[0]);
+      s.gap_to = over(t, sizes[0]);
+      break;
+    }
+  }
+  if (s.gap_from < s.gap_to && s.gap_to >= s.from) {  // the gap reaches `from`: one range
+    s.from = std::min(s.from, s.gap_from);
+    s.gap_from = s.gap_to = 0.0;
+  }
+  // The small-feature test cuts both ranges from below.
+  const double diameter = 2.0 * double(b.radius);
+  const double feature =
+      min_feature_px > 0.0 ? (diameter > 0.0 ? min_feature_px / diameter : INFINITY) : 0.0;
+  s.from = std::max(s.from, feature);
+  s.gap_from = std::max(s.gap_from, feature);
+  s.gap_to = std::min(s.gap_to, s.from);
+  if (!(s.gap_from < s.gap_to)) s.gap_from = s.gap_to = 0.0;
+  return s;
 }
 
 void cullBackFaces(Form& f, const InstanceBounds& b, bool eye_outside, bool inside_hidden) {

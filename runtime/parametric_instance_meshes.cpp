@@ -30,6 +30,7 @@
 #include "gl_program.h"
 #include "parametric_instance_expansion.h"
 #include "parametric_instance_forms.h"
+#include "parametric_instance_scales.h"
 #include "parametric_meshes.h"
 #include "parametric_shaders.h"
 #include "sealed_pipe_runs.h"
@@ -49,6 +50,7 @@ struct ExpandedPart {
   std::vector<ParametricMeshInstance> profiles;
   InstanceLodStats stats;
   LatheScratch lathe;
+  std::vector<uint32_t> selected;  // a cluster's instances that may show (InstanceScaleIndex)
 
   void clear() {
     batch.clear();
@@ -69,12 +71,17 @@ struct ExpandedPart {
     stats.instances_culled += part.stats.instances_culled;
     stats.thin_instances += part.stats.thin_instances;
     stats.instances_occluded += part.stats.instances_occluded;
+    stats.instances_tested += part.stats.instances_tested;
   }
 };
 
 struct ParametricInstanceMeshes::Impl {
   const PackageView* view = nullptr;
   std::vector<InstanceBounds> bounds;  // by instance index
+  // The scales at which each instance shows: built with the bounds for InstanceLodView's
+  // default thresholds, and again by prepare() for a frame whose thresholds differ.
+  bool use_scale_index = true;
+  InstanceScaleIndex scales;
   // Parametric clusters holding members or closers of sealed runs, with the box (package frame)
   // of those instances; and whether this frame's eye is clear of all of them.
   struct RunCluster {
@@ -264,6 +271,7 @@ struct ParametricInstanceMeshes::Impl {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
     if (!(b.flags & kValid)) return;
+    ++stats.instances_tested;
     const glm::vec3 centre = anchor_eye + b.centre;
     const double px_per_m = choice.pixel_scale / distanceOf(b, centre);
     bool outside = 2.0 * b.radius * px_per_m < choice.view.min_feature_px;
@@ -297,6 +305,13 @@ struct ParametricInstanceMeshes::Impl {
           record.instance_count > bounds.size() - record.instance_first)
         continue;
       const glm::vec3 anchor_eye(clusterAnchor(record) - choice.view.eye);
+      uint32_t skipped = 0;
+      if (use_scale_index && scales.select(c, anchor_eye, choice.pixel_scale, choice.near_m,
+                                           part.selected, skipped)) {
+        part.stats.instances_culled += skipped;  // as consider() would count them
+        for (uint32_t i : part.selected) consider(part, c, anchor_eye, i);
+        continue;
+      }
       for (uint32_t i = record.instance_first; i < record.instance_first + record.instance_count; ++i)
         consider(part, c, anchor_eye, i);
     }
@@ -428,6 +443,7 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   Impl& s = *impl_;
   s.view = &view;
   s.clusters_per_run = options.clusters_per_run;
+  s.use_scale_index = options.scale_index;
   s.primitives_per_flush = options.primitives_per_flush;
   const auto instances = view.instances();
   if (view.header().flags & pkg::kHeaderSealedRunsMarked) {
@@ -458,6 +474,11 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
                           s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
                       }
                     });
+  if (s.use_scale_index) {
+    const InstanceLodView defaults;
+    s.scales.build(clusters, s.bounds,
+                   {defaults.thin_px, defaults.min_thin_px, defaults.min_feature_px});
+  }
   while (glGetError() != GL_NO_ERROR) {
   }
   s.program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricSmoothVertexShader()},
@@ -536,6 +557,10 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
       nearPlaneReach(choice.near_m, 1.0 / std::max(double(glm::length(glm::vec3(row_x))), 1e-6),
                      1.0 / std::max(double(glm::length(glm::vec3(row_y))), 1e-6)));
   choice.test = view.pass == InstancePass::Second && view.box_hidden;
+  const InstanceScaleIndex::Thresholds thresholds{view.thin_px, view.min_thin_px,
+                                                  view.min_feature_px};
+  if (s.use_scale_index && !s.scales.builtFor(thresholds))
+    s.scales.build(records, s.bounds, thresholds);
   const float near_reach = choice.near_reach;
 
   s.frame.clear();
@@ -656,6 +681,7 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       stats.instances_culled += part.stats.instances_culled;
       stats.thin_instances += part.stats.thin_instances;
       stats.instances_occluded += part.stats.instances_occluded;
+      stats.instances_tested += part.stats.instances_tested;
     }
     s.expansion.wait();
     s.streaming = false;

@@ -82,6 +82,9 @@ struct InstanceLodStats {
   uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
   uint64_t thin_instances = 0;     // of instances_drawn: as ribbons or points
   uint64_t instances_occluded = 0; // second pass: hidden by the pyramid, one by one
+  // Tested one by one (culled, deferred or drawn); the others of the frame's clusters were left
+  // out by InstanceScaleIndex, too small at their distance to show.
+  uint64_t instances_tested = 0;
   uint32_t draw_calls = 0;
   uint32_t unit_meshes = 0;        // made so far
 };

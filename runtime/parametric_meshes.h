@@ -39,6 +39,9 @@ struct ParametricMeshOptions {
   // parts of at most this many triangles or points, each flushed
   // (ParametricInstanceMeshes::submit); 0: one draw a batch, no flush.
   uint32_t primitives_per_flush = 8192;
+  // Tessellated mode: visit only the instances of a cluster whose distance lets them show
+  // (InstanceScaleIndex); false tests every instance, for comparison. The frame is the same.
+  bool scale_index = true;
 };
 
 // One vertex of a tessellated cluster: 20 bytes. The normal is the surface's own (the

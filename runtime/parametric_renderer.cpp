@@ -358,6 +358,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.clusters_drawn += static_cast<uint32_t>(s.instance_clusters.size());
     stats.instances_drawn += lod_stats.instances_drawn;
     stats.instances_occluded += lod_stats.instances_occluded;
+    stats.instances_tested += lod_stats.instances_tested;
     stats.mesh_triangles += lod_stats.triangles_drawn;
     stats.two_sided_triangles += lod_stats.two_sided_triangles;
     stats.thin_instances += lod_stats.thin_instances;

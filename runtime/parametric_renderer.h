@@ -73,6 +73,7 @@ struct ParametricDrawStats {
   uint64_t two_sided_triangles = 0;  // of mesh_triangles: drawn without back-face culling
   uint64_t thin_instances = 0;       // tessellated mode: of instances_drawn, ribbons and points
   uint64_t instances_occluded = 0;   // tessellated mode, second pass: hidden one by one
+  uint64_t instances_tested = 0;     // tessellated mode: tested one by one (InstanceLodStats)
   uint32_t meshes_built = 0;
   double cpu_ms = 0.0;  // CPU time of the call and of its prepare() (llvmpipe rasterizes later)
 };

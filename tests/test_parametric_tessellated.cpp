@@ -818,5 +818,50 @@ TEST_F(ParametricRendering, DrawnInFlushedPartsDrawsWhatOneDrawDraws) {
   }
 }
 
+// A far view visits only the instances its distance lets show (InstanceScaleIndex): the frame,
+// and every count, must be the one testing each instance gives. Rows of everything that can be
+// too small to show from afar: thin pipes long and short (the short ones points, the long ones
+// nothing), spheres, beams, elbows and boxes, at distances from near to far.
+TEST_F(ParametricRendering, ScaleIndexDrawsWhatTestingEveryInstanceDraws) {
+  std::vector<Part> parts;
+  uint32_t id = 1;
+  for (int row = 0; row < 8; ++row) {
+    const double y = 10.0 + 12.0 * row;
+    for (int k = 0; k < 12; ++k) {
+      const double x = -6.0 + 1.1 * k;
+      parts.push_back({id++, Cylinder{0.02f + 0.01f * float(k % 3), 4.0f, false},
+                       placed({x, y, 0.0}, {90, 0, 0})});
+      parts.push_back({id++, Cylinder{0.03f, 0.15f + 0.1f * float(k % 4), true},
+                       placed({x, y + 2.0, 1.0})});
+      parts.push_back({id++, Sphere{0.02f + 0.03f * float(k % 4)}, placed({x, y + 4.0, 2.0})});
+      parts.push_back({id++, Box{{0.02f, 0.03f, 1.5f}}, placed({x, y + 6.0, 0.5}, {0, 90, 0})});
+      parts.push_back({id++, Box{{0.05f + 0.05f * float(k % 3), 0.1f, 0.08f}},
+                       placed({x, y + 8.0, 2.5})});
+      parts.push_back({id++, TorusSegment{0.3f, 0.02f + 0.02f * float(k % 2), 1.5708f},
+                       placed({x, y + 10.0, 1.5})});
+    }
+  }
+  const fs::path pkg = buildPackage("scale_index", parts, false);
+  const Camera camera = lookingAt({0.0, -20.0, 6.0}, {0.0, 40.0, 0.0});
+  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
+    SCOPED_TRACE(occlusionModeName(occlusion));
+    const Frame every = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr, false,
+                               1.0, 0.0, 32, 8192, false);
+    const Frame indexed = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr,
+                                 false, 1.0, 0.0, 32, 8192, true);
+    // Something is drawn, something left out, and the index visits fewer than all.
+    EXPECT_GT(every.stats.parametric_instances_drawn, 100u);
+    EXPECT_GT(every.stats.parametric_thin_instances, 50u);
+    EXPECT_LT(every.stats.parametric_instances_drawn, parts.size() - 50);
+    EXPECT_EQ(every.stats.parametric_instances_tested, parts.size());
+    EXPECT_LT(indexed.stats.parametric_instances_tested, every.stats.parametric_instances_tested);
+    EXPECT_EQ(indexed.stats.parametric_instances_drawn, every.stats.parametric_instances_drawn);
+    EXPECT_EQ(indexed.stats.parametric_thin_instances, every.stats.parametric_thin_instances);
+    EXPECT_EQ(indexed.stats.parametric_triangles, every.stats.parametric_triangles);
+    EXPECT_EQ(indexed.ids, every.ids);
+    EXPECT_EQ(indexed.rgba, every.rgba);
+  }
+}
+
 }  // namespace
 }  // namespace tw

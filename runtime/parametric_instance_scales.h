@@ -1,0 +1,67 @@
+// Per parametric instance, the scales at which it can show at all (shownScales), and per
+// cluster a sphere around its instances, so that a far view tests one by one only the instances
+// its distance lets show.
+//
+// Why: from outside the 50M plant every one of its 9,421 parametric clusters is in view, and the
+// per-instance choice tested all 602,735 instances each frame to draw about 47,000 (the 5M
+// plant: 60,017 to draw about 19,000). Each test reads the instance's 68-byte bounds. Here a
+// cluster whose every instance lies at scales (pixels per metre) below k_max and above k_min
+// reads 12 bytes an instance and tests only those that show somewhere in [k_min, k_max]: about
+// 55,000 a frame at 50M. Conservative: an instance left out here is one the choice would leave
+// out, and the others are still tested one by one in instance order, so the frame is the same.
+#pragma once
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "package_format.h"
+#include "parametric_instance_forms.h"
+
+namespace tw {
+
+class InstanceScaleIndex {
+ public:
+  // The thresholds (InstanceLodView's) the index was built for.
+  struct Thresholds {
+    double thin_px = 0.0, min_thin_px = 0.0, min_feature_px = 0.0;
+    bool operator==(const Thresholds&) const = default;
+  };
+
+  // Takes the scales of every instance of every parametric cluster of `clusters` (instance
+  // ranges already checked against `bounds`, whose index is the instance's) for `thresholds`;
+  // on TBB.
+  void build(std::span<const pkg::ClusterRecord> clusters,
+             std::span<const instance_forms::InstanceBounds> bounds, const Thresholds& thresholds);
+  bool builtFor(const Thresholds& thresholds) const { return built_ && thresholds_ == thresholds; }
+
+  // The instances of cluster `cluster` that may show with its anchor at `anchor_eye` from the
+  // eye, pixel_scale and near_m as the choice takes them: false when every valid instance may
+  // (visit them all); otherwise `out` holds those that may, in instance order, and `skipped` the
+  // valid ones left out.
+  bool select(uint32_t cluster, const glm::vec3& anchor_eye, double pixel_scale, double near_m,
+              std::vector<uint32_t>& out, uint32_t& skipped) const;
+
+ private:
+  struct ClusterEntry {
+    glm::vec3 centre{0.0f};  // of a sphere holding its valid instances' spheres, anchor-relative
+    float radius = 0.0f;
+    float shown_all = 0.0f;  // the scale from which every valid instance may show
+    uint32_t first = 0, count = 0;  // its instances
+    uint32_t valid = 0;
+  };
+  // An instance's ShownScales, widened by a margin for the choice's float arithmetic; never
+  // shown (from infinite, no gap) when it is not valid. 12 bytes: a far view reads these, not
+  // the 68-byte bounds.
+  struct Scales {
+    float from, gap_from, gap_to;
+  };
+  std::vector<ClusterEntry> clusters_;  // by cluster index; count 0 for the others
+  std::vector<Scales> scales_;          // by instance index
+  Thresholds thresholds_;
+  bool built_ = false;
+};
+
+}  // namespace tw
