@@ -154,7 +154,6 @@ void Walkthrough::drawParametrics(std::span<const uint32_t> clusters, FrameStats
     stats->parametric_thin_instances += drawn.thin_instances;
     stats->parametric_occluded += drawn.instances_occluded;
     stats->parametric_instances_tested += drawn.instances_tested;
-    stats->parametric_points_hidden += drawn.points_hidden;
     stats->parametric_cpu_ms += drawn.cpu_ms;
   }
 }

@@ -42,7 +42,6 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("parametric_cpu_ms", s.parametric_cpu_ms);
   visit("parametric_occluded", s.parametric_occluded);
   visit("parametric_instances_tested", s.parametric_instances_tested);
-  visit("parametric_points_hidden", s.parametric_points_hidden);
   visit("pages_resident", s.pages_resident);
   visit("pages_requested", s.pages_requested);
   visit("pages_loaded", s.pages_loaded);

@@ -37,9 +37,6 @@ struct FrameStats {
   // Tessellated mode: instances of drawn clusters tested one by one; the others were too small
   // at their distance to show (InstanceScaleIndex) and never looked at.
   uint64_t parametric_instances_tested = 0;
-  // Tessellated mode: of the instances drawn as points, those a nearer point in the same pixel
-  // hides, left out of the batch (dropHiddenPoints).
-  uint64_t parametric_points_hidden = 0;
   uint32_t pages_resident = 0;
   uint32_t pages_requested = 0;     // in the queue at the end of the frame
   uint32_t pages_loaded = 0;        // uploaded this frame

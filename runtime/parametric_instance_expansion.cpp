@@ -321,48 +321,4 @@ void appendPoint(InstanceBatch& batch, uint32_t object, const glm::vec3& at) {
   batch.vertices.push_back({at, object, 0u});
 }
 
-uint32_t dropHiddenPoints(InstanceBatch& batch, const glm::mat4& view_projection,
-                          glm::ivec2 viewport, std::vector<PointSample>& scratch) {
-  std::vector<uint32_t>& points = batch.indices[kPoints];
-  if (points.size() < 2 || viewport.x <= 0 || viewport.y <= 0) return 0;
-  // Pixels: nearer a pixel edge than this, which pixel the rasterizer takes is uncertain. It
-  // snaps positions to its subpixel grid first (llvmpipe: 1/256 px; GL allows as coarse as
-  // 1/16), and with a 1/1000 px margin a few points of the 50M orbit were dropped that a point
-  // in the next pixel did not hide.
-  constexpr float kEdge = 1.0f / 16.0f;
-  constexpr float kDepthMargin = 1e-5f;  // relative: nearer than this, the order is uncertain
-  scratch.clear();
-  const float width = float(viewport.x), height = float(viewport.y);
-  for (uint32_t k = 0; k < points.size(); ++k) {
-    const glm::vec4 clip = view_projection * glm::vec4(batch.vertices[points[k]].position, 1.0f);
-    if (!(clip.w > 0.0f)) continue;
-    const float x = (clip.x / clip.w * 0.5f + 0.5f) * width;
-    const float y = (clip.y / clip.w * 0.5f + 0.5f) * height;
-    if (!(x >= 0.0f && x < width && y >= 0.0f && y < height)) continue;
-    const float fx = x - std::floor(x), fy = y - std::floor(y);
-    if (fx < kEdge || fx > 1.0f - kEdge || fy < kEdge || fy > 1.0f - kEdge) continue;
-    const uint32_t pixel = uint32_t(y) * uint32_t(viewport.x) + uint32_t(x);
-    scratch.push_back({pixel, clip.z / clip.w, k});
-  }
-  if (scratch.size() < 2) return 0;
-  std::sort(scratch.begin(), scratch.end(), [](const PointSample& a, const PointSample& b) {
-    return a.pixel != b.pixel ? a.pixel < b.pixel : a.depth > b.depth;
-  });
-  // In each pixel the nearest comes first; the others it clearly hides are marked.
-  uint32_t dropped = 0;
-  for (size_t k = 0; k < scratch.size();) {
-    size_t end = k + 1;
-    while (end < scratch.size() && scratch[end].pixel == scratch[k].pixel) ++end;
-    const float nearest = scratch[k].depth;
-    for (size_t j = k + 1; j < end; ++j)
-      if (scratch[j].depth < nearest - kDepthMargin * std::abs(nearest)) {
-        points[scratch[j].order] = ~0u;
-        ++dropped;
-      }
-    k = end;
-  }
-  if (dropped != 0) points.erase(std::remove(points.begin(), points.end(), ~0u), points.end());
-  return dropped;
-}
-
 }  // namespace tw::instance_forms

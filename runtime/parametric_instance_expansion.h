@@ -104,22 +104,4 @@ void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in,
 // Appends a point at `at` (eye-relative) for object `object`.
 void appendPoint(InstanceBatch& batch, uint32_t object, const glm::vec3& at);
 
-// Where a point of a batch lands: its pixel and depth (reversed: larger is nearer), and its
-// place in the batch's point list. Scratch for dropHiddenPoints.
-struct PointSample {
-  uint32_t pixel;
-  float depth;
-  uint32_t order;
-};
-
-// Removes from batch.indices[kPoints] the points that a nearer point of the same batch hides:
-// both in one pixel of a `viewport`-sized image under `view_projection` (eye-relative), the
-// other nearer by more than the depth buffer could confuse. Points a size-1 point rasterizes
-// into a pixel of its own, so the nearer one's pixel is what the depth test would keep; a point
-// within 1/16 pixel of a pixel edge (the subpixel snapping of any GL rasterizer), off screen or
-// behind the eye is kept as it is.
-// The order of the points kept is unchanged. Returns how many were removed.
-uint32_t dropHiddenPoints(InstanceBatch& batch, const glm::mat4& view_projection,
-                          glm::ivec2 viewport, std::vector<PointSample>& scratch);
-
 }  // namespace tw::instance_forms

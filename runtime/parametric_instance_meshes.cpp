@@ -51,7 +51,6 @@ struct ExpandedPart {
   InstanceLodStats stats;
   LatheScratch lathe;
   std::vector<uint32_t> selected;  // a cluster's instances that may show (InstanceScaleIndex)
-  std::vector<PointSample> point_samples;  // dropHiddenPoints' scratch
 
   void clear() {
     batch.clear();
@@ -73,7 +72,6 @@ struct ExpandedPart {
     stats.thin_instances += part.stats.thin_instances;
     stats.instances_occluded += part.stats.instances_occluded;
     stats.instances_tested += part.stats.instances_tested;
-    stats.points_hidden += part.stats.points_hidden;
   }
 };
 
@@ -84,7 +82,6 @@ struct ParametricInstanceMeshes::Impl {
   // default thresholds, and again by prepare() for a frame whose thresholds differ.
   bool use_scale_index = true;
   InstanceScaleIndex scales;
-  bool drop_hidden_points = true;  // ParametricMeshOptions::drop_hidden_points
   // Parametric clusters holding members or closers of sealed runs, with the box (package frame)
   // of those instances; and whether this frame's eye is clear of all of them.
   struct RunCluster {
@@ -319,20 +316,11 @@ struct ParametricInstanceMeshes::Impl {
         consider(part, c, anchor_eye, i);
     }
   }
-  // Run r of `runs` over frame_clusters, into parts[r]; a streamed run's part is drawn as it
-  // is, so its hidden points go here.
+  // Run r of `runs` over frame_clusters, into parts[r].
   void expandRun(size_t r, size_t runs) {
-    ExpandedPart& part = parts[r];
-    part.clear();
+    parts[r].clear();
     const size_t n = frame_clusters.size();
-    expandClusters(part, n * r / runs, n * (r + 1) / runs);
-    if (streaming) dropPoints(part);
-  }
-  // Leaves out the points of `part` that its nearer points hide (dropHiddenPoints).
-  void dropPoints(ExpandedPart& part) {
-    if (!drop_hidden_points) return;
-    part.stats.points_hidden += dropHiddenPoints(part.batch, choice.view.view_projection,
-                                                 choice.view.viewport, part.point_samples);
+    expandClusters(parts[r], n * r / runs, n * (r + 1) / runs);
   }
   // Streaming: expands the next run nobody has claimed; false when none is left.
   bool claimAndExpand() {
@@ -456,7 +444,6 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   s.view = &view;
   s.clusters_per_run = options.clusters_per_run;
   s.use_scale_index = options.scale_index;
-  s.drop_hidden_points = options.drop_hidden_points;
   s.primitives_per_flush = options.primitives_per_flush;
   const auto instances = view.instances();
   if (view.header().flags & pkg::kHeaderSealedRunsMarked) {
@@ -660,7 +647,6 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     }
     s.frame.to_test.clear();
   }
-  s.dropPoints(s.frame);
   s.drawn.insert(s.drawn.end(), s.frame.drawn.begin(), s.frame.drawn.end());
   s.deferred.insert(s.deferred.end(), s.frame.deferred.begin(), s.frame.deferred.end());
   profiles.assign(s.frame.profiles.begin(), s.frame.profiles.end());
@@ -696,7 +682,6 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
       stats.thin_instances += part.stats.thin_instances;
       stats.instances_occluded += part.stats.instances_occluded;
       stats.instances_tested += part.stats.instances_tested;
-      stats.points_hidden += part.stats.points_hidden;
     }
     s.expansion.wait();
     s.streaming = false;

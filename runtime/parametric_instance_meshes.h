@@ -69,7 +69,6 @@ struct InstanceLodView {
   // pixels, for a small gain (measured there).
   double thin_px = 1.0;
   double min_thin_px = 0.4;
-  glm::ivec2 viewport{0};  // pixels; points a nearer point hides are left out when not zero
   InstancePass pass = InstancePass::All;
   // Second pass: whether an eye-relative box is hidden by this frame's pyramid. Called from
   // several threads at once.
@@ -86,9 +85,6 @@ struct InstanceLodStats {
   // Tested one by one (culled, deferred or drawn); the others of the frame's clusters were left
   // out by InstanceScaleIndex, too small at their distance to show.
   uint64_t instances_tested = 0;
-  // Points of instances drawn that a nearer point in the same pixel hides, left out of the batch
-  // (dropHiddenPoints).
-  uint64_t points_hidden = 0;
   uint32_t draw_calls = 0;
   uint32_t unit_meshes = 0;        // made so far
 };

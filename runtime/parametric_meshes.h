@@ -42,9 +42,6 @@ struct ParametricMeshOptions {
   // Tessellated mode: visit only the instances of a cluster whose distance lets them show
   // (InstanceScaleIndex); false tests every instance, for comparison. The frame is the same.
   bool scale_index = true;
-  // Tessellated mode: leave out the points a nearer point hides in the same pixel
-  // (dropHiddenPoints); false draws them all, for comparison. The frame is the same.
-  bool drop_hidden_points = true;
 };
 
 // One vertex of a tessellated cluster: 20 bytes. The normal is the surface's own (the

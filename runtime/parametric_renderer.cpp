@@ -143,7 +143,6 @@ struct ParametricRenderer::Impl {
     lod_view.near_m = camera.near_m;
     lod_view.tolerance_px = camera.tolerance_px;
     lod_view.min_feature_px = camera.min_feature_px;
-    lod_view.viewport = glm::ivec2(renderer->width(), renderer->height());
     lod_view.pass = camera.pass;
     lod_view.box_hidden = camera.box_hidden;
     return lod_view;
@@ -360,7 +359,6 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
     stats.instances_drawn += lod_stats.instances_drawn;
     stats.instances_occluded += lod_stats.instances_occluded;
     stats.instances_tested += lod_stats.instances_tested;
-    stats.points_hidden += lod_stats.points_hidden;
     stats.mesh_triangles += lod_stats.triangles_drawn;
     stats.two_sided_triangles += lod_stats.two_sided_triangles;
     stats.thin_instances += lod_stats.thin_instances;

@@ -74,7 +74,6 @@ struct ParametricDrawStats {
   uint64_t thin_instances = 0;       // tessellated mode: of instances_drawn, ribbons and points
   uint64_t instances_occluded = 0;   // tessellated mode, second pass: hidden one by one
   uint64_t instances_tested = 0;     // tessellated mode: tested one by one (InstanceLodStats)
-  uint64_t points_hidden = 0;        // tessellated mode: points a nearer point hides, left out
   uint32_t meshes_built = 0;
   double cpu_ms = 0.0;  // CPU time of the call and of its prepare() (llvmpipe rasterizes later)
 };

@@ -88,14 +88,13 @@ inline Frame render(const fs::path& package, const Camera& camera, ParametricMod
                     OcclusionMode occlusion = OcclusionMode::Off, Walkthrough** keep = nullptr,
                     bool reference = false, double tau_px = 0.25, double fixed_tolerance_m = 0.0,
                     uint32_t clusters_per_run = 32, uint32_t primitives_per_flush = 8192,
-                    bool scale_index = true, bool drop_hidden_points = true) {
+                    bool scale_index = true) {
   WalkthroughOptions options;
   options.reference = reference;
   options.parametric_meshes.fixed_tolerance_m = fixed_tolerance_m;
   options.parametric_meshes.clusters_per_run = clusters_per_run;
   options.parametric_meshes.primitives_per_flush = primitives_per_flush;
   options.parametric_meshes.scale_index = scale_index;
-  options.parametric_meshes.drop_hidden_points = drop_hidden_points;
   options.width = kWidth;
   options.height = kHeight;
   options.occlusion = occlusion;

@@ -863,37 +863,5 @@ TEST_F(ParametricRendering, ScaleIndexDrawsWhatTestingEveryInstanceDraws) {
   }
 }
 
-// Far pairs of small things one behind the other (a pipe's two flanges, a valve's), each
-// thinner than a pixel every way, so a point: the farther's point is left out where the nearer's
-// hides it in the same pixel, and the frame and every count but that are the ones all points
-// give.
-TEST_F(ParametricRendering, PointsHiddenByNearerPointsAreLeftOut) {
-  std::vector<Part> parts;
-  uint32_t id = 1;
-  for (int row = 0; row < 6; ++row)
-    for (int k = 0; k < 20; ++k) {
-      const glm::dvec3 at(-10.0 + 1.05 * k, 55.0 + 5.0 * row, 0.8 * row);
-      parts.push_back({id++, Box{glm::vec3(0.2f)}, placed(at)});
-      parts.push_back({id++, Box{glm::vec3(0.2f)}, placed(at + glm::dvec3(0.0, 0.45, 0.0))});
-    }
-  const fs::path pkg = buildPackage("hidden_points", parts, false);
-  const Camera camera = lookingAt({0.0, -20.0, 3.0}, {0.0, 60.0, 0.0});
-  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
-    SCOPED_TRACE(occlusionModeName(occlusion));
-    const Frame all = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr, false,
-                             1.0, 0.0, 32, 8192, true, false);
-    const Frame dropped = render(pkg, camera, ParametricMode::Tessellated, occlusion, nullptr,
-                                 false, 1.0, 0.0, 32, 8192, true, true);
-    EXPECT_EQ(all.stats.parametric_points_hidden, 0u);
-    EXPECT_GT(all.stats.parametric_thin_instances, 150u);  // most of the 240 are points
-    EXPECT_GT(dropped.stats.parametric_points_hidden, 60u);  // 102 of the 240 when written
-    EXPECT_EQ(dropped.stats.parametric_instances_drawn, all.stats.parametric_instances_drawn);
-    EXPECT_EQ(dropped.stats.parametric_thin_instances, all.stats.parametric_thin_instances);
-    EXPECT_EQ(dropped.ids, all.ids);
-    EXPECT_EQ(dropped.depth, all.depth);
-    EXPECT_EQ(dropped.rgba, all.rgba);
-  }
-}
-
 }  // namespace
 }  // namespace tw
