@@ -196,7 +196,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         f.shape = Shape::Box;
         f.box_frame = true;
       }
-      // A revolution: half the tolerance for the angle, half for the profile (lathe()).
+      // A revolution: half the tolerance for the angle, half for the profile (appendLathe).
       if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Revolution)) {
         f.shape = Shape::Lathe;
         f.a = levelIndex(arcSegments(std::max(b.size[0], b.size[1]), float(kTwoPi), 0.5f * tolerance));

@@ -14,9 +14,7 @@
 #include <future>
 #include <memory>
 #include <mutex>
-#include <numbers>
 #include <stdexcept>
-#include <string>
 #include <thread>
 #include <utility>
 #include <vector>
