@@ -26,7 +26,8 @@ void InstanceScaleIndex::build(std::span<const pkg::ClusterRecord> clusters,
                                std::span<const InstanceBounds> bounds,
                                const Thresholds& thresholds) {
   clusters_.assign(clusters.size(), ClusterEntry{});
-  scales_.assign(bounds.size(), Scales{INFINITY, 0.0f, 0.0f});
+  shown_from_.assign(bounds.size(), ShownFrom{INFINITY, 0});
+  gaps_.assign(bounds.size(), Gap{0.0f, 0.0f, 0});
   tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters.size(), 64),
                     [&](const tbb::blocked_range<size_t>& range) {
     for (size_t c = range.begin(); c != range.end(); ++c) {
@@ -46,25 +47,29 @@ void InstanceScaleIndex::build(std::span<const pkg::ClusterRecord> clusters,
         hi = glm::max(hi, b.centre + b.radius);
       }
       entry.centre = lo.x <= hi.x ? 0.5f * (lo + hi) : glm::vec3(0.0f);
+      ShownFrom* const shown_from = shown_from_.data() + entry.first;
+      Gap* const gaps = gaps_.data() + entry.first;
       float radius = 0.0f, shown_all = 0.0f;
       for (uint32_t k = 0; k < entry.count; ++k) {
         const InstanceBounds& b = members[k];
+        shown_from[k].instance = entry.first + k;
         if (!(b.flags & kValid)) continue;  // never shown: the choice skips it too
         ++entry.valid;
         radius = std::max(radius, glm::length(b.centre - entry.centre) + b.radius);
         const ShownScales s = instance_forms::shownScales(b, thresholds.thin_px,
                                                           thresholds.min_thin_px,
                                                           thresholds.min_feature_px);
-        Scales& scales = scales_[r.instance_first + k];
-        scales.from = float(s.from * kLower);
-        if (s.gap_from < s.gap_to) {
-          scales.gap_from = float(s.gap_from * kLower);
-          scales.gap_to = float(s.gap_to * kUpper);
-        }
-        shown_all = std::max(shown_all, scales.from);
+        shown_from[k].from = float(s.from * kLower);
+        if (s.gap_from < s.gap_to)
+          gaps[entry.gap_count++] = {float(s.gap_from * kLower), float(s.gap_to * kUpper), entry.first + k};
+        shown_all = std::max(shown_all, shown_from[k].from);
       }
       entry.radius = radius * float(kUpper) + 1e-6f;
       entry.shown_all = shown_all;
+      std::sort(shown_from, shown_from + entry.count,
+                [](const ShownFrom& a, const ShownFrom& b) { return a.from < b.from; });
+      std::sort(gaps, gaps + entry.gap_count,
+                [](const Gap& a, const Gap& b) { return a.gap_to > b.gap_to; });
     }
   });
   thresholds_ = thresholds;
@@ -83,13 +88,18 @@ bool InstanceScaleIndex::select(uint32_t cluster, const glm::vec3& anchor_eye, d
   if (scale_max >= double(entry.shown_all)) return false;
   const double scale_min = pixel_scale / std::max(distance + double(entry.radius), near_m);
   out.clear();
-  const Scales* scales = scales_.data() + entry.first;
-  for (uint32_t k = 0; k < entry.count; ++k) {
-    const Scales& s = scales[k];
-    if (double(s.from) <= scale_max ||
-        (double(s.gap_from) <= scale_max && double(s.gap_to) > scale_min))
-      out.push_back(entry.first + k);
-  }
+  // Those shown from a scale at most scale_max, then those whose gap reaches into
+  // [scale_min, scale_max]; each list ends at its first entry out of reach.
+  const ShownFrom* const shown_from = shown_from_.data() + entry.first;
+  for (uint32_t k = 0; k < entry.count && double(shown_from[k].from) <= scale_max; ++k)
+    out.push_back(shown_from[k].instance);
+  const size_t shown = out.size();
+  const Gap* const gaps = gaps_.data() + entry.first;
+  for (uint32_t k = 0; k < entry.gap_count && double(gaps[k].gap_to) > scale_min; ++k)
+    if (double(gaps[k].gap_from) <= scale_max) out.push_back(gaps[k].instance);
+  // Instance order, as the choice visits them; an instance in both lists once.
+  std::sort(out.begin(), out.end());
+  if (out.size() != shown) out.erase(std::unique(out.begin(), out.end()), out.end());
   skipped = entry.valid - uint32_t(out.size());
   return true;
 }

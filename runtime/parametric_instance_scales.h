@@ -6,9 +6,13 @@
 // per-instance choice tested all 602,735 instances each frame to draw about 47,000 (the 5M
 // plant: 60,017 to draw about 19,000). Each test reads the instance's 68-byte bounds. Here a
 // cluster whose every instance lies at scales (pixels per metre) below k_max and above k_min
-// reads 12 bytes an instance and tests only those that show somewhere in [k_min, k_max]: about
-// 55,000 a frame at 50M. Conservative: an instance left out here is one the choice would leave
-// out, and the others are still tested one by one in instance order, so the frame is the same.
+// tests only those that show somewhere in [k_min, k_max]: about 57,000 a frame at 50M.
+// Conservative: an instance left out here is one the choice would leave out, and the others are
+// still tested one by one in instance order, so the frame is the same.
+//
+// A cluster keeps its instances sorted twice: by the scale from which each shows, and those with
+// a gap by the scale where the gap ends. A far view reads only the entries that can show, not
+// one per instance: reading the 50M plant's 602,735 a frame was the runtime's costliest loop.
 #pragma once
 
 #include <cstdint>
@@ -49,17 +53,25 @@ class InstanceScaleIndex {
     glm::vec3 centre{0.0f};  // of a sphere holding its valid instances' spheres, anchor-relative
     float radius = 0.0f;
     float shown_all = 0.0f;  // the scale from which every valid instance may show
-    uint32_t first = 0, count = 0;  // its instances
+    uint32_t first = 0, count = 0;  // its instances; its entries in shown_from_ and gaps_
     uint32_t valid = 0;
+    uint32_t gap_count = 0;  // its entries in gaps_
   };
-  // An instance's ShownScales, widened by a margin for the choice's float arithmetic; never
-  // shown (from infinite, no gap) when it is not valid. 12 bytes: a far view reads these, not
-  // the 68-byte bounds.
-  struct Scales {
-    float from, gap_from, gap_to;
+  // An instance's ShownScales, widened by a margin for the choice's float arithmetic. Not valid:
+  // never shown (from infinite, no gap).
+  struct ShownFrom {
+    float from;
+    uint32_t instance;
+  };
+  struct Gap {
+    float gap_from, gap_to;
+    uint32_t instance;
   };
   std::vector<ClusterEntry> clusters_;  // by cluster index; count 0 for the others
-  std::vector<Scales> scales_;          // by instance index
+  // A cluster's [first, first + count): its instances by ascending `from`.
+  std::vector<ShownFrom> shown_from_;
+  // A cluster's [first, first + gap_count): its instances with a gap, by descending `gap_to`.
+  std::vector<Gap> gaps_;
   Thresholds thresholds_;
   bool built_ = false;
 };
