@@ -92,18 +92,12 @@ vec4 objectBaseColor(uint object) {
 )";
 }
 
-inline std::string shadingGlsl() {
-  return objectColorGlsl() + R"(
+// The lighting alone, for a vertex stage that shades a point once for all its fragments.
+inline std::string lightingGlsl() {
+  return R"(
 const vec3 kSunDir = normalize(vec3(0.35, 0.25, 0.90));  // world (eye-relative axes are world axes)
 const vec3 kSky = vec3(0.80, 0.86, 0.95);
 const vec3 kGround = vec3(0.30, 0.27, 0.24);
-// The face normal of the triangle under the fragment, from screen-space derivatives of its
-// eye-relative position (facing the eye where they vanish: lines, points, slivers).
-vec3 facetNormal(vec3 pos_eye) {
-  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
-  float len = length(n);
-  return len > 1e-30 ? n / len : normalize(-pos_eye);
-}
 // n: unit normal of the side seen (it may lean a little away from the eye at a silhouette),
 // pos_eye: the shaded point relative to the eye.
 vec4 shadeSeenSide(vec4 base, vec3 n, vec3 pos_eye) {
@@ -118,6 +112,18 @@ vec4 shadeSurface(vec4 base, vec3 n, vec3 pos_eye) {
   return shadeSeenSide(base, dot(n, pos_eye) > 0.0 ? -n : n, pos_eye);
 }
 )";
+}
+
+inline std::string shadingGlsl() {
+  return objectColorGlsl() + R"(
+// The face normal of the triangle under the fragment, from screen-space derivatives of its
+// eye-relative position (facing the eye where they vanish: lines, points, slivers).
+vec3 facetNormal(vec3 pos_eye) {
+  vec3 n = cross(dFdx(pos_eye), dFdy(pos_eye));
+  float len = length(n);
+  return len > 1e-30 ? n / len : normalize(-pos_eye);
+}
+)" + lightingGlsl();
 }
 
 // The per-triangle object table of the pool, read by the mesh pass's two stages.

@@ -113,6 +113,7 @@ struct ParametricInstanceMeshes::Impl {
     }
   }
   GLuint program = 0, vertex_array = 0, beam_program = 0, beam_vertex_array = 0;
+  GLuint point_program = 0;  // the points' batch: shaded per vertex
   // The GL buffers of each part drawn in a frame (set 0 for a batch drawn whole): a part's are
   // filled while llvmpipe may still read the previous part's.
   struct BufferSet {
@@ -196,6 +197,7 @@ struct ParametricInstanceMeshes::Impl {
     expansion.wait();
     glDeleteProgram(program);
     glDeleteProgram(beam_program);
+    glDeleteProgram(point_program);
     for (const BufferSet& set : buffer_sets) {
       glDeleteBuffers(1, &set.vertices);
       glDeleteBuffers(1, &set.beam_vertices);
@@ -365,6 +367,7 @@ struct ParametricInstanceMeshes::Impl {
     for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
       const size_t count = first[batch + 1] - first[batch];
       if (count == 0) continue;
+      if (batch == kPoints) glUseProgram(point_program);
       if (batch == kBeams) {  // the last batch: vertices and a program of their own
         glUseProgram(beam_program);
         glBindVertexArray(beam_vertex_array);
@@ -493,6 +496,9 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   glVertexArrayAttribFormat(s.vertex_array, 2, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(SmoothVertex, normal));
   glVertexArrayAttribBinding(s.vertex_array, 2, 0);
   s.bufferSet(0);  // the parts' buffers are bound to the vertex arrays as each is drawn
+  s.point_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricPointVertexShader()},
+                                    {GL_FRAGMENT_SHADER, gl::parametricPointFragmentShader()}},
+                                   "ParametricInstanceMeshes (points)");
   s.beam_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricBeamVertexShader()},
                                    {GL_FRAGMENT_SHADER, gl::parametricBeamFragmentShader()}},
                                   "ParametricInstanceMeshes (beams)");
@@ -658,7 +664,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
 void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
                                       InstanceLodStats& stats) {
   Impl& s = *impl_;
-  for (GLuint program : {s.program, s.beam_program}) {
+  for (GLuint program : {s.program, s.beam_program, s.point_program}) {
     glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
                               &view_projection[0][0]);
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, object_color_count);

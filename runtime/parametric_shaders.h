@@ -395,6 +395,39 @@ void main() {
 )";
 }
 
+// The points of far instances thin in every direction (appendPoint): shaded once, in the vertex
+// stage. A point's inputs do not vary across it, so its derivative normal is the one facing the
+// eye and parametricSmoothFragmentShader would compute this same colour for each fragment; here
+// llvmpipe sets up and shades no interpolated inputs (the 50M plant's orbit draws some 22,000).
+inline std::string parametricPointVertexShader() {
+  return std::string(R"(#version 450 core
+layout(location = 0) in vec3 position;  // metres from the eye
+layout(location = 1) in uint object;
+layout(location = 0) uniform mat4 view_projection;
+flat out vec4 v_color;
+flat out uint v_object;
+)") + objectColorGlsl() + lightingGlsl() + R"(
+void main() {
+  v_object = object;
+  v_color = shadeSeenSide(objectBaseColor(object), normalize(-position), position);
+  gl_Position = view_projection * vec4(position, 1.0);
+}
+)";
+}
+
+inline std::string parametricPointFragmentShader() {
+  return R"(#version 450 core
+flat in vec4 v_color;
+flat in uint v_object;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+void main() {
+  out_color = v_color;
+  out_id = v_object + 1u;
+}
+)";
+}
+
 // Thin beams drawn per instance as their silhouette (appendBeamRibbon in
 // parametric_instance_expansion.h): one band of two triangles facing the eye, across the two long
 // faces the eye sees. Each vertex carries both faces' normals and `across`, negative on the first
