@@ -27,7 +27,7 @@ void InstanceScaleIndex::build(std::span<const pkg::ClusterRecord> clusters,
                                const Thresholds& thresholds) {
   clusters_.assign(clusters.size(), ClusterEntry{});
   shown_from_.assign(bounds.size(), ShownFrom{INFINITY, 0});
-  gaps_.assign(bounds.size(), Gap{0.0f, 0.0f, 0});
+  gaps_.assign(bounds.size(), Gap{0.0f, 0.0f, 0.0f, 0});
   tbb::parallel_for(tbb::blocked_range<size_t>(0, clusters.size(), 64),
                     [&](const tbb::blocked_range<size_t>& range) {
     for (size_t c = range.begin(); c != range.end(); ++c) {
@@ -61,7 +61,8 @@ void InstanceScaleIndex::build(std::span<const pkg::ClusterRecord> clusters,
                                                           thresholds.min_feature_px);
         shown_from[k].from = float(s.from * kLower);
         if (s.gap_from < s.gap_to)
-          gaps[entry.gap_count++] = {float(s.gap_from * kLower), float(s.gap_to * kUpper), entry.first + k};
+          gaps[entry.gap_count++] = {float(s.gap_from * kLower), float(s.gap_to * kUpper), 0.0f,
+                                     entry.first + k};
         shown_all = std::max(shown_all, shown_from[k].from);
       }
       entry.radius = radius * float(kUpper) + 1e-6f;
@@ -69,7 +70,12 @@ void InstanceScaleIndex::build(std::span<const pkg::ClusterRecord> clusters,
       std::sort(shown_from, shown_from + entry.count,
                 [](const ShownFrom& a, const ShownFrom& b) { return a.from < b.from; });
       std::sort(gaps, gaps + entry.gap_count,
-                [](const Gap& a, const Gap& b) { return a.gap_to > b.gap_to; });
+                [](const Gap& a, const Gap& b) { return a.gap_from < b.gap_from; });
+      for (uint32_t k = entry.gap_count; k-- > 0;) {
+        gaps[k].ahead_to = gaps[k].gap_to;
+        for (uint32_t n = k + 1; n < std::min(k + kGapSkip, entry.gap_count); ++n)
+          gaps[k].ahead_to = std::max(gaps[k].ahead_to, gaps[n].gap_to);
+      }
     }
   });
   thresholds_ = thresholds;
@@ -89,14 +95,21 @@ bool InstanceScaleIndex::select(uint32_t cluster, const glm::vec3& anchor_eye, d
   const double scale_min = pixel_scale / std::max(distance + double(entry.radius), near_m);
   out.clear();
   // Those shown from a scale at most scale_max, then those whose gap reaches into
-  // [scale_min, scale_max]; each list ends at its first entry out of reach.
+  // [scale_min, scale_max]; each list ends at its first entry that starts above scale_max, and
+  // the gaps pass by kGapSkip those that all end at or below scale_min.
   const ShownFrom* const shown_from = shown_from_.data() + entry.first;
   for (uint32_t k = 0; k < entry.count && double(shown_from[k].from) <= scale_max; ++k)
     out.push_back(shown_from[k].instance);
   const size_t shown = out.size();
   const Gap* const gaps = gaps_.data() + entry.first;
-  for (uint32_t k = 0; k < entry.gap_count && double(gaps[k].gap_to) > scale_min; ++k)
-    if (double(gaps[k].gap_from) <= scale_max) out.push_back(gaps[k].instance);
+  for (uint32_t k = 0; k < entry.gap_count && double(gaps[k].gap_from) <= scale_max;) {
+    if (double(gaps[k].ahead_to) <= scale_min) {
+      k += kGapSkip;
+      continue;
+    }
+    if (double(gaps[k].gap_to) > scale_min) out.push_back(gaps[k].instance);
+    ++k;
+  }
   // Instance order, as the choice visits them; an instance in both lists once.
   std::sort(out.begin(), out.end());
   if (out.size() != shown) out.erase(std::unique(out.begin(), out.end()), out.end());

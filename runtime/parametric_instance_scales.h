@@ -11,8 +11,9 @@
 // still tested one by one in instance order, so the frame is the same.
 //
 // A cluster keeps its instances sorted twice: by the scale from which each shows, and those with
-// a gap by the scale where the gap ends. A far view reads only the entries that can show, not
-// one per instance: reading the 50M plant's 602,735 a frame was the runtime's costliest loop.
+// a gap by the scale where the gap starts, each with the largest end of the next few gaps. A far
+// view reads about the entries that can show, not one per instance: reading the 50M plant's
+// 602,735 a frame was the runtime's costliest loop.
 #pragma once
 
 #include <cstdint>
@@ -65,12 +66,17 @@ class InstanceScaleIndex {
   };
   struct Gap {
     float gap_from, gap_to;
+    float ahead_to;  // the largest gap_to of this entry and the kGapSkip - 1 after it (cluster's)
     uint32_t instance;
   };
+  // A gap of a tube's or a box's is [mt / L, t / L) for its length L (shownScales), so by
+  // ascending gap_from the gaps also end nearly in order: the ones a far view is already past
+  // come first, and are passed kGapSkip at a time.
+  static constexpr uint32_t kGapSkip = 8;
   std::vector<ClusterEntry> clusters_;  // by cluster index; count 0 for the others
   // A cluster's [first, first + count): its instances by ascending `from`.
   std::vector<ShownFrom> shown_from_;
-  // A cluster's [first, first + gap_count): its instances with a gap, by descending `gap_to`.
+  // A cluster's [first, first + gap_count): its instances with a gap, by ascending `gap_from`.
   std::vector<Gap> gaps_;
   Thresholds thresholds_;
   bool built_ = false;
