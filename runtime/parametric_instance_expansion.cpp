@@ -261,15 +261,17 @@ void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
 // The fragments choose the face (parametricBeamFragmentShader). Two triangles show what the
 // box's six to twelve would, but for its end faces; two bands of two, one a face, made the 50M
 // plant's orbit 20 % slower (docs/benchmarks.md, "Thin beams in one band").
-void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in,
-                      std::span<const glm::vec2> profile_points, const InstanceBounds& b,
+void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
                       const glm::vec3& anchor_eye, int axis) {
-  glm::vec3 lo, hi;
-  if (!instanceLocalBox(in, profile_points, lo, hi)) return;
   const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                          in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
-  const glm::vec3 half = 0.5f * (hi - lo);
-  const glm::vec3 axes[3] = {linear[0] * half.x, linear[1] * half.y, linear[2] * half.z};
+  // The canonical box's half sizes mapped: b.size holds them in metres (half times the column's
+  // length), so each column is scaled to that length.
+  glm::vec3 axes[3];
+  for (int k = 0; k < 3; ++k) {
+    const float length = glm::length(linear[k]);
+    axes[k] = length > 0.0f ? linear[k] * (b.size[k] / length) : glm::vec3(0.0f);
+  }
   const glm::vec3 along = axes[axis];
   glm::vec3 u = axes[(axis + 1) % 3], w = axes[(axis + 2) % 3];
   const float along_length = glm::length(along);

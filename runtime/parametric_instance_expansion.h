@@ -96,9 +96,9 @@ void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
 // Appends box-framed instance `in` (a box, or an extrusion or revolution by its box), thinner
 // than a pixel across its two shorter axes, as a band along its longest axis `axis` facing the
 // eye, as wide as its cross-section seen from there, each side of the edge where the two long
-// faces the eye sees meet shaded with its own face's normal.
-void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in,
-                      std::span<const glm::vec2> profile_points, const InstanceBounds& b,
+// faces the eye sees meet shaded with its own face's normal. The box's half sizes are the
+// bounds' (`b.size`), so the profile is not read again.
+void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
                       const glm::vec3& anchor_eye, int axis);
 
 // Appends a point at `at` (eye-relative) for object `object`.

@@ -15,7 +15,6 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -245,7 +244,7 @@ struct ParametricInstanceMeshes::Impl {
     const pkg::InstanceRecord& in = view->instances()[i];
     if (form.shape == Shape::Ribbon) {
       if (form.box_frame)
-        appendBeamRibbon(part.batch, in, view->profilePoints(), b, anchor_eye, form.long_axis);
+        appendBeamRibbon(part.batch, in, b, anchor_eye, form.long_axis);
       else
         appendTubeRibbon(part.batch, in, b, anchor_eye, kLevels[form.a]);
       return;
@@ -328,6 +327,7 @@ struct ParametricInstanceMeshes::Impl {
     if (r >= stream_runs) return false;
     expandRun(r, stream_runs);
     run_done[r].store(1, std::memory_order_release);
+    run_done[r].notify_all();
     return true;
   }
 
@@ -674,8 +674,10 @@ void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t
     // Each run's part as soon as it is done, in run order; waiting for one, expand another.
     std::vector<ParametricMeshInstance>& profiles = *s.stream_profiles;
     for (size_t r = 0; r < s.stream_runs; ++r) {
+      // Nothing left to claim: sleep until the run's worker is done, leaving the core to
+      // llvmpipe's rasterizer threads (a spin with yield kept it).
       while (!s.run_done[r].load(std::memory_order_acquire))
-        if (!s.claimAndExpand()) std::this_thread::yield();
+        if (!s.claimAndExpand()) s.run_done[r].wait(0, std::memory_order_acquire);
       ExpandedPart& part = s.parts[r];
       s.drawPart(part.batch, r, part.stats.instances_drawn - part.profiles.size(), unflushed, stats);
       s.drawn.insert(s.drawn.end(), part.drawn.begin(), part.drawn.end());
