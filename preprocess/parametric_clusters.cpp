@@ -2,6 +2,9 @@
 #include "parametric_clusters.h"
 
 #include <algorithm>
+#include <cmath>
+#include <type_traits>
+#include <variant>
 #include <limits>
 #include <stdexcept>
 
@@ -20,6 +23,51 @@ uint64_t spread21(uint64_t x) {
 }
 
 }  // namespace
+
+float parametricShowWidth(const Primitive& primitive, const Transform& transform) {
+  const glm::vec3 scale(glm::length(transform.linear[0]), glm::length(transform.linear[1]),
+                        glm::length(transform.linear[2]));
+  const float cross = std::max(scale.x, scale.y), largest = std::max({scale.x, scale.y, scale.z});
+  auto second = [](float a, float b, float c) {  // the second largest of three
+    return std::max(std::min(a, b), std::min(std::max(a, b), c));
+  };
+  auto profileBox = [](const std::vector<glm::vec2>& profile, glm::vec2& lo, glm::vec2& hi) {
+    lo = glm::vec2(std::numeric_limits<float>::max());
+    hi = -lo;
+    for (const glm::vec2& q : profile) {
+      lo = glm::min(lo, q);
+      hi = glm::max(hi, q);
+    }
+    if (profile.empty()) lo = hi = glm::vec2(0.0f);
+  };
+  const float width = std::visit(
+      [&](const auto& p) -> float {
+        using T = std::decay_t<decltype(p)>;
+        if constexpr (std::is_same_v<T, Cylinder>) {
+          return 2.0f * p.radius * cross;
+        } else if constexpr (std::is_same_v<T, Cone>) {
+          return 2.0f * std::max(p.radius_bottom, p.radius_top) * cross;
+        } else if constexpr (std::is_same_v<T, Sphere>) {
+          return 2.0f * p.radius * largest;
+        } else if constexpr (std::is_same_v<T, TorusSegment>) {
+          return 2.0f * p.minor_radius * largest;
+        } else if constexpr (std::is_same_v<T, Box>) {
+          const glm::vec3 size = 2.0f * p.half_extents * scale;
+          return second(size.x, size.y, size.z);
+        } else if constexpr (std::is_same_v<T, Extrusion>) {
+          glm::vec2 lo, hi;
+          profileBox(p.profile, lo, hi);
+          return second((hi.x - lo.x) * scale.x, (hi.y - lo.y) * scale.y, p.height * scale.z);
+        } else {  // Revolution: (radius, z) pairs about +Z
+          glm::vec2 lo, hi;
+          profileBox(p.profile, lo, hi);
+          const float diameter = 2.0f * std::max(std::abs(lo.x), std::abs(hi.x)) * cross;
+          return second(diameter, diameter, (hi.y - lo.y) * scale.z);
+        }
+      },
+      primitive);
+  return std::isnan(width) ? 0.0f : width;  // a strict order for the sort
+}
 
 uint64_t parametricMortonCode(const glm::vec3& unit) {
   auto q = [](float f) { return uint64_t(std::clamp(f, 0.0f, 1.0f) * 2097151.0f); };
@@ -88,6 +136,13 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
   }
   out.offsets.push_back(uint32_t(keys.size()));
   if (out.types.empty()) out.offsets.clear();
+  // Within each cluster, widest first (stable: ties keep Morton order).
+  std::vector<float> width(items.size());
+  for (size_t i = 0; i < items.size(); ++i)
+    width[i] = parametricShowWidth(items[i].primitive, items[i].transform);
+  for (size_t c = 0; c + 1 < out.offsets.size(); ++c)
+    std::stable_sort(out.order.begin() + out.offsets[c], out.order.begin() + out.offsets[c + 1],
+                     [&](uint32_t a, uint32_t b) { return width[a] > width[b]; });
   return out;
 }
 

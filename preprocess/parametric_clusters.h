@@ -4,8 +4,9 @@
 //
 // Clustering: items are grouped by primitive type (a cluster holds one type, so one shader draws
 // it), then each type's items are sorted by the 63-bit Morton code of their box centre (in the
-// bounding cube of all items) and cut into ceil(n / max_per_cluster) runs of near-equal size.
-// Ties in Morton order keep input order, so the result is deterministic.
+// bounding cube of all items) and cut into ceil(n / max_per_cluster) runs of near-equal size;
+// each run, a cluster, is then ordered by parametricShowWidth, widest first. Ties (in Morton
+// order, then in width) keep input order, so the result is deterministic.
 //
 // LOD: a parametric cluster is a level-0 root: error 0, parent_error = +inf, no group, no parent
 // group, lod spheres = its own bounding sphere. Why: the shader draws each primitive exactly at
@@ -51,6 +52,15 @@ struct ParametricClustering {
 // The 63-bit Morton code of a point in the unit cube (21 bits per axis, clamped): the order of
 // items of one type (shared with the out-of-core clustering, parametric_external_sort.h).
 uint64_t parametricMortonCode(const glm::vec3& unit);
+
+// How wide an instance is across all but its longest direction, in metres: the second largest
+// of its canonical box's sizes, the columns' lengths applied (a tube's, cone's or sphere's
+// diameter, an elbow's tube's, a revolution's). From far away the runtime first shows an
+// instance when this width reaches a fraction of a pixel (shownScales in
+// runtime/parametric_instance_forms.h), so within a cluster the instances go widest first: what
+// a far view draws of a cluster is at its front, and a far view reads few cache lines of it.
+// 0 where the parameters give no number.
+float parametricShowWidth(const Primitive& primitive, const Transform& transform);
 
 // Groups `items` into clusters of at most max_per_cluster instances (see the file comment).
 // Box centres are computed in the frame of `package_origin`. Throws std::invalid_argument if

@@ -495,8 +495,9 @@ class RunReader {
 // Memory a reader takes besides its buffer and its largest profile.
 constexpr uint64_t kReaderOverheadBytes = sizeof(RunReader) + sizeof(RunFile) + 64;
 
-// Adds instances in clustering order and closes each cluster when its precomputed size is
-// reached: per type, ceil(n / max) runs of sizes n * r / runs apart, as clusterPrimitives cuts.
+// Collects items in clustering order and, when a cluster's precomputed size is reached, adds its
+// instances widest first and closes it: per type, ceil(n / max) runs of sizes n * r / runs apart,
+// as clusterPrimitives cuts and orders them.
 // The role flags options.instance_role_flags gives the item of input index `index` (none when
 // it is empty; its size was checked against the item count).
 uint32_t roleFlags(const ParametricSortOptions& options, uint32_t index) {
@@ -523,13 +524,25 @@ class ClusterCutter {
     }
     if (pos_ >= n_)
       throw std::logic_error("parametric sort: more items of a type than counted");
-    const uint32_t instance =
-        storage_.addInstance(item.primitive, item.transform, item.object, role_flags);
-    if (pos_ == begin_) first_ = instance;
-    else if (uint64_t(instance) != first_ + (pos_ - begin_))
-      throw std::logic_error("parametric sort: storage did not append instances contiguously");
+    // Refused here, as the item arrives, so its run is named; added when its cluster is whole.
+    (void)placedInstanceRecord(item.primitive, item.transform, item.object, storage_.origin);
+    if (role_flags & ~uint32_t(pkg::kInstanceSealedRunMember | pkg::kInstanceSealedRunCloser))
+      throw std::invalid_argument("parametric sort: unknown instance role flags");
+    pending_.push_back({item, role_flags, parametricShowWidth(item.primitive, item.transform)});
     ++pos_;
     if (pos_ == end_) {
+      // Widest first, ties in arrival (Morton) order: clusterPrimitives' order.
+      std::stable_sort(pending_.begin(), pending_.end(),
+                       [](const Pending& a, const Pending& b) { return a.width > b.width; });
+      for (size_t k = 0; k < pending_.size(); ++k) {
+        const Pending& p = pending_[k];
+        const uint32_t instance =
+            storage_.addInstance(p.item.primitive, p.item.transform, p.item.object, p.role_flags);
+        if (k == 0) first_ = instance;
+        else if (uint64_t(instance) != first_ + k)
+          throw std::logic_error("parametric sort: storage did not append instances contiguously");
+      }
+      pending_.clear();
       storage_.addParametricCluster(first_, uint32_t(end_ - begin_), ClusterLod{});
       ++clusters_;
       ++r_;
@@ -560,6 +573,13 @@ class ClusterCutter {
   uint64_t n_ = 0, runs_ = 0, r_ = 0, pos_ = 0, begin_ = 0, end_ = 0;
   uint64_t first_ = 0;
   uint32_t clusters_ = 0;
+  // The items of the cluster being filled, added once it is whole.
+  struct Pending {
+    ParametricItem item;
+    uint32_t role_flags;
+    float width;
+  };
+  std::vector<Pending> pending_;
 };
 
 // k-way merge of `readers` (each not yet advanced) by key; `emit(reader)` gets each record.

@@ -35,7 +35,8 @@ struct ParametricSortOptions {
   std::filesystem::path work_dir;
   // Items + keys held at once while sorting, then read buffers + current items while merging;
   // at least 1 MiB. Not counted: the caller's batches, `storage` itself, a scratch copy of one
-  // item, and a few hundred bytes per run.
+  // item, the items of the cluster being filled (at most max_per_cluster), and a few hundred
+  // bytes per run.
   uint64_t memory_budget_bytes = 64ull << 20;
   uint32_t max_per_cluster = 256;           // as clusterPrimitives
   // By input item index: role flags for PackageStorage::addInstance (sealed runs,
