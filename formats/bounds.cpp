@@ -12,7 +12,9 @@ void grow(LocalBox& box, const glm::vec3& p) {
   box.max = glm::max(box.max, p);
 }
 
-LocalBox primitiveBox(const Primitive& primitive) {
+}  // namespace
+
+LocalBox primitiveBounds(const Primitive& primitive) {
   LocalBox box;
   std::visit(
       [&](const auto& p) {
@@ -56,14 +58,12 @@ LocalBox primitiveBox(const Primitive& primitive) {
   return box;
 }
 
-}  // namespace
-
 LocalBox localBounds(const Geometry& geometry) {
   LocalBox box;
   if (const auto* mesh = std::get_if<TriangleMesh>(&geometry)) {
     for (const glm::vec3& p : mesh->positions) grow(box, p);
   } else if (const auto* primitive = std::get_if<Primitive>(&geometry)) {
-    box = primitiveBox(*primitive);
+    box = primitiveBounds(*primitive);
   } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&geometry)) {
     for (const NurbsPatch& patch : nurbs->patches)
       for (const glm::vec4& cp : patch.control_points) grow(box, glm::vec3(cp));

@@ -38,5 +38,7 @@ struct LocalBox {
   glm::vec3 max{-std::numeric_limits<float>::infinity()};
 };
 LocalBox localBounds(const Geometry& geometry);
+// The same for one primitive in its canonical frame (a torus segment's is its whole torus's).
+LocalBox primitiveBounds(const Primitive& primitive);
 
 }  // namespace tw

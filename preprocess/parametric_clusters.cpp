@@ -3,10 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <type_traits>
-#include <variant>
 #include <limits>
 #include <stdexcept>
+#include <variant>
+
+#include "bounds.h"
 
 namespace tw {
 
@@ -27,46 +28,16 @@ uint64_t spread21(uint64_t x) {
 float parametricShowWidth(const Primitive& primitive, const Transform& transform) {
   const glm::vec3 scale(glm::length(transform.linear[0]), glm::length(transform.linear[1]),
                         glm::length(transform.linear[2]));
-  const float cross = std::max(scale.x, scale.y), largest = std::max({scale.x, scale.y, scale.z});
-  auto second = [](float a, float b, float c) {  // the second largest of three
-    return std::max(std::min(a, b), std::min(std::max(a, b), c));
-  };
-  auto profileBox = [](const std::vector<glm::vec2>& profile, glm::vec2& lo, glm::vec2& hi) {
-    lo = glm::vec2(std::numeric_limits<float>::max());
-    hi = -lo;
-    for (const glm::vec2& q : profile) {
-      lo = glm::min(lo, q);
-      hi = glm::max(hi, q);
-    }
-    if (profile.empty()) lo = hi = glm::vec2(0.0f);
-  };
-  const float width = std::visit(
-      [&](const auto& p) -> float {
-        using T = std::decay_t<decltype(p)>;
-        if constexpr (std::is_same_v<T, Cylinder>) {
-          return 2.0f * p.radius * cross;
-        } else if constexpr (std::is_same_v<T, Cone>) {
-          return 2.0f * std::max(p.radius_bottom, p.radius_top) * cross;
-        } else if constexpr (std::is_same_v<T, Sphere>) {
-          return 2.0f * p.radius * largest;
-        } else if constexpr (std::is_same_v<T, TorusSegment>) {
-          return 2.0f * p.minor_radius * largest;
-        } else if constexpr (std::is_same_v<T, Box>) {
-          const glm::vec3 size = 2.0f * p.half_extents * scale;
-          return second(size.x, size.y, size.z);
-        } else if constexpr (std::is_same_v<T, Extrusion>) {
-          glm::vec2 lo, hi;
-          profileBox(p.profile, lo, hi);
-          return second((hi.x - lo.x) * scale.x, (hi.y - lo.y) * scale.y, p.height * scale.z);
-        } else {  // Revolution: (radius, z) pairs about +Z
-          glm::vec2 lo, hi;
-          profileBox(p.profile, lo, hi);
-          const float diameter = 2.0f * std::max(std::abs(lo.x), std::abs(hi.x)) * cross;
-          return second(diameter, diameter, (hi.y - lo.y) * scale.z);
-        }
-      },
-      primitive);
-  return std::isnan(width) ? 0.0f : width;  // a strict order for the sort
+  float width = 0.0f;
+  if (const auto* torus = std::get_if<TorusSegment>(&primitive)) {
+    width = 2.0f * torus->minor_radius * std::max({scale.x, scale.y, scale.z});  // the tube
+  } else {
+    const LocalBox box = primitiveBounds(primitive);
+    const glm::vec3 size = (box.max - box.min) * scale;
+    // The second largest of the three (a tube's, a sphere's or a revolution's diameter).
+    width = std::max(std::min(size.x, size.y), std::min(std::max(size.x, size.y), size.z));
+  }
+  return std::isfinite(width) ? width : 0.0f;  // a strict order for the sort; no profile: 0
 }
 
 uint64_t parametricMortonCode(const glm::vec3& unit) {

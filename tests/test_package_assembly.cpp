@@ -486,7 +486,7 @@ TEST(ParametricClusters, ShowWidthIsTheSecondLargestSize) {
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Cylinder{0.1f, 0.05f, true}, unit), 0.2f);  // a disc
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Cylinder{0.1f, 6.0f, true}, stretched), 0.4f);
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Cone{0.1f, 0.3f, 1.0f, true}, unit), 0.6f);
-  EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Sphere{0.25f}, stretched), 1.5f);
+  EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Sphere{0.25f}, stretched), 1.0f);  // 1 x 0.5 x 1.5
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::TorusSegment{0.6f, 0.1f, 1.57f}, unit), 0.2f);
   // A deck plate shows by its shorter side, a beam by its depth.
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Box{glm::vec3(4.0f, 2.75f, 0.01f)}, unit), 5.5f);
@@ -495,9 +495,9 @@ TEST(ParametricClusters, ShowWidthIsTheSecondLargestSize) {
   const std::vector<glm::vec2> i_profile = {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, 0.15f},
                                             {-0.075f, 0.15f}};
   EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Extrusion{i_profile, 6.0f}, unit), 0.3f);
-  EXPECT_FLOAT_EQ(tw::parametricShowWidth(tw::Revolution{{{0.0f, 0.0f}, {1.2f, 0.5f}, {0.0f, 4.0f}}, 6.28f},
-                                          unit),
-                  2.4f);
+  const tw::Revolution vessel{{{0.0f, 0.0f}, {1.2f, 0.5f}, {0.0f, 4.0f}}, 6.28f};
+  EXPECT_FLOAT_EQ(tw::parametricShowWidth(vessel, unit), 2.4f);
+  EXPECT_EQ(tw::parametricShowWidth(tw::Extrusion{{}, 1.0f}, unit), 0.0f);  // no profile
 }
 
 TEST(ParametricClusters, InstancesOfAClusterGoWidestFirst) {
