@@ -55,6 +55,7 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
   // Box centres through the package's own instance conversion, so the clustering sees exactly
   // the bounds the package will store (and bad parameters fail here, before anything is added).
   std::vector<glm::vec3> centers(items.size());
+  std::vector<float> width(items.size());  // the order within a cluster, widest first
   {
     PackageStorage scratch;
     scratch.origin = package_origin;
@@ -63,6 +64,7 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
       glm::vec3 box_lo, box_hi;
       instanceBounds(scratch.instances.back(), scratch.profile_points, box_lo, box_hi);
       centers[i] = 0.5f * (box_lo + box_hi);
+      width[i] = parametricShowWidth(items[i].primitive, items[i].transform);
       scratch.instances.clear();  // bounds are taken; keep the scratch small
       scratch.profile_points.clear();
     }
@@ -108,9 +110,6 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
   out.offsets.push_back(uint32_t(keys.size()));
   if (out.types.empty()) out.offsets.clear();
   // Within each cluster, widest first (stable: ties keep Morton order).
-  std::vector<float> width(items.size());
-  for (size_t i = 0; i < items.size(); ++i)
-    width[i] = parametricShowWidth(items[i].primitive, items[i].transform);
   for (size_t c = 0; c + 1 < out.offsets.size(); ++c)
     std::stable_sort(out.order.begin() + out.offsets[c], out.order.begin() + out.offsets[c + 1],
                      [&](uint32_t a, uint32_t b) { return width[a] > width[b]; });
