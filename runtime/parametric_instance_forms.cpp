@@ -15,6 +15,11 @@ namespace {
 
 const float kMaxRingSwell = ringSwell(3);
 
+// The middle one of three sizes.
+float secondLargest(const std::array<float, 3>& v) {
+  return std::max(std::min(v[0], v[1]), std::min(std::max(v[0], v[1]), v[2]));
+}
+
 }  // namespace
 
 uint32_t levelIndex(uint32_t segments) {
@@ -138,7 +143,7 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
     case Shape::Tube:
       if (2.0f * b.size[0] < thin) {
         f.shape = b.size[1] < thin ? Shape::Point : Shape::Ribbon;
-        across = f.shape == Shape::Point ? std::max(2.0f * b.size[0], b.size[1]) : 2.0f * b.size[0];
+        across = 2.0f * b.size[0];
         break;
       }
       f.shape = Shape::Tube;
@@ -187,7 +192,10 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         f.box_frame = true;
         f.long_axis = static_cast<uint8_t>(longest);
       } else if (f.shape == Shape::Point) {
-        across = 2.0f * b.size[longest];
+        // Its second largest size, as for a ribbon: what it covers of a pixel is at most its
+        // largest times that, so a rail post far below a pixel across is left out at every
+        // scale, not drawn as a pixel from afar and left out nearer.
+        across = 2.0f * secondLargest(b.size);
       }
       // An extrusion is drawn as its box when the profile lies within `tolerance` of the box's
       // sides (at most half its smaller width away), or is the box.
@@ -211,55 +219,28 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
 }
 
 // Derived from chooseForm's rules with k the scale, thin = thin_px / k, min_thin = min_thin_px / k
-// (mt = min_thin_px <= t = thin_px):
-// - a tube of diameter D and length H is a surface or a ribbon as wide as D while H k >= t or
-//   D k >= t, a point as long as max(D, H) otherwise: shown from mt / D, and as a point over
-//   [mt / H, t / H);
-// - a sphere of diameter D and a torus of tube diameter D: from mt / D;
-// - a box (extrusion, revolution) with doubled half-extents L >= M >= S is a point as long as L
-//   below t / L, a ribbon as wide as M up to t / M, a surface above: shown from
-//   max(t / L, mt / M), and as a point over [mt / L, t / L);
-// and nothing shows below min_feature_px / (2 r), r the bounding sphere's radius.
-ShownScales shownScales(const InstanceBounds& b, double thin_px, double min_thin_px,
-                        double min_feature_px) {
-  ShownScales s;
-  if (!(b.flags & kValid)) return s;
-  const double t = thin_px, mt = std::min(min_thin_px, thin_px);
-  // A thin form of zero width is never left out (chooseForm leaves out only widths above zero).
-  auto over = [](double px, double metres) { return metres > 0.0 ? px / metres : 0.0; };
+// (mt = min_thin_px <= thin_px): every thin form (ribbon or point) is as wide as the instance's
+// second largest size M, and anything wider than a pixel there is a surface, so an instance
+// shows from mt / M on: a tube's diameter, a sphere's, a torus's tube; a box's (extrusion's,
+// revolution's) middle size. Nothing shows below min_feature_px / (2 r) either, r the bounding
+// sphere's radius.
+double shownFrom(const InstanceBounds& b, double thin_px, double min_thin_px,
+                 double min_feature_px) {
+  if (!(b.flags & kValid)) return INFINITY;
+  const double mt = std::min(min_thin_px, thin_px);
+  double across = 0.0;  // M, in metres
   switch (surfaceOf(b.type)) {
-    case Shape::Tube: {
-      const double diameter = 2.0 * double(b.size[0]), length = b.size[1];
-      s.from = over(mt, diameter);
-      s.gap_from = over(mt, length);
-      s.gap_to = over(t, length);
-      break;
-    }
-    case Shape::Sphere: s.from = over(mt, 2.0 * double(b.size[0])); break;
-    case Shape::Torus: s.from = over(mt, 2.0 * double(b.size[1])); break;
-    default: {
-      std::array<double, 3> sizes = {2.0 * double(b.size[0]), 2.0 * double(b.size[1]),
-                                     2.0 * double(b.size[2])};
-      std::sort(sizes.begin(), sizes.end(), std::greater<>());
-      s.from = std::max(over(t, sizes[0]), over(mt, sizes[1]));
-      s.gap_from = over(mt, sizes[0]);
-      s.gap_to = over(t, sizes[0]);
-      break;
-    }
+    case Shape::Tube: across = 2.0 * double(b.size[0]); break;
+    case Shape::Sphere: across = 2.0 * double(b.size[0]); break;
+    case Shape::Torus: across = 2.0 * double(b.size[1]); break;
+    default: across = 2.0 * double(secondLargest(b.size)); break;
   }
-  if (s.gap_from < s.gap_to && s.gap_to >= s.from) {  // the gap reaches `from`: one range
-    s.from = std::min(s.from, s.gap_from);
-    s.gap_from = s.gap_to = 0.0;
-  }
-  // The small-feature test cuts both ranges from below.
+  // A thin form of zero width is never left out (chooseForm leaves out only widths above zero).
+  const double from = across > 0.0 ? mt / across : 0.0;
   const double diameter = 2.0 * double(b.radius);
   const double feature =
       min_feature_px > 0.0 ? (diameter > 0.0 ? min_feature_px / diameter : INFINITY) : 0.0;
-  s.from = std::max(s.from, feature);
-  s.gap_from = std::max(s.gap_from, feature);
-  s.gap_to = std::min(s.gap_to, s.from);
-  if (!(s.gap_from < s.gap_to)) s.gap_from = s.gap_to = 0.0;
-  return s;
+  return std::max(from, feature);
 }
 
 void cullBackFaces(Form& f, const InstanceBounds& b, bool eye_outside, bool inside_hidden) {

@@ -111,19 +111,16 @@ struct Form {
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; a tube
 // or elbow thinner than `thin` metres across a ribbon, a box, extrusion or revolution thin in two
 // directions a ribbon along its longest axis, an instance thin in all three a point; any of these
-// thinner than `min_thin`, nothing. Surfaces come two-sided: cullBackFaces decides.
+// whose second largest size (a tube's diameter) is under `min_thin`, nothing. Surfaces come
+// two-sided: cullBackFaces decides.
 Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin);
-// The scales at which an instance shows at all, in pixels per metre at its nearest point (the
-// choice's pixel_scale / distance): from `from` on, and within [gap_from, gap_to) below that,
-// where a thing too thin for a ribbon is short enough to be a point. Elsewhere the small-feature
-// test (its bounding sphere below min_feature_px) or chooseForm (None: below min_thin_px) leaves
-// it out. A far view then visits only the instances that can show (InstanceScaleIndex).
-struct ShownScales {
-  double from = INFINITY;
-  double gap_from = 0.0, gap_to = 0.0;  // empty unless gap_from < gap_to
-};
-ShownScales shownScales(const InstanceBounds& b, double thin_px, double min_thin_px,
-                        double min_feature_px);
+// The scale from which an instance shows at all, in pixels per metre at its nearest point (the
+// choice's pixel_scale / distance): below it the small-feature test (its bounding sphere below
+// min_feature_px) or chooseForm (None: its thin form below min_thin_px) leaves it out, from it
+// on they never do, as a thin form is as wide as the same size at every scale. A far view then
+// visits only the instances that can show (InstanceScaleIndex). Infinite when never shown.
+double shownFrom(const InstanceBounds& b, double thin_px, double min_thin_px,
+                 double min_feature_px);
 
 // Culls the back faces of surface form `f` where the front faces hide them. `eye_outside`: the
 // eye is outside the solid (eyeOutsideSolid); `inside_hidden`: an open tube's or elbow's inside

@@ -1,4 +1,4 @@
-// The scales at which a parametric instance shows (shownScales) against the choice they are
+// The scale from which a parametric instance shows (shownFrom) against the choice it is
 // derived from (the small-feature test and chooseForm), and InstanceScaleIndex against testing
 // every instance: nothing the choice would draw may be left out, and little else kept in.
 #include <gtest/gtest.h>
@@ -46,48 +46,100 @@ InstanceBounds randomBounds(std::mt19937& rng) {
   return b;
 }
 
-bool within(const ShownScales& s, double k) {
-  return k >= s.from || (s.gap_from <= k && k < s.gap_to);
-}
-
-TEST(ShownScales, AgreeWithTheChoiceAtEveryScale) {
+TEST(ShownFrom, AgreesWithTheChoiceAtEveryScale) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> log_scale(-3.0, 4.0);
-  int shown = 0, hidden = 0, gaps = 0, in_gap = 0;
+  int shown = 0, hidden = 0, points = 0;
   for (int n = 0; n < 20000; ++n) {
     const InstanceBounds b = randomBounds(rng);
-    const ShownScales s = shownScales(b, kThinPx, kMinThinPx, kMinFeaturePx);
-    gaps += s.gap_from < s.gap_to;
+    const double from = shownFrom(b, kThinPx, kMinThinPx, kMinFeaturePx);
     for (int j = 0; j < 20; ++j) {
       const double k = std::pow(10.0, log_scale(rng));
       const bool kept = chosen(b, k);
-      // Away from the range ends (float rounding there), the choice and the scales agree.
-      const bool clear = within(s, k * (1.0 + 1e-4)) == within(s, k * (1.0 - 1e-4));
-      if (!clear) continue;
-      EXPECT_EQ(kept, within(s, k)) << "type " << int(b.type) << " size " << b.size[0] << " "
-                                    << b.size[1] << " " << b.size[2] << " k " << k;
+      // Away from the threshold (float rounding there), the choice and the scale agree.
+      if (std::abs(k / from - 1.0) < 1e-4) continue;
+      EXPECT_EQ(kept, k >= from) << "type " << int(b.type) << " size " << b.size[0] << " "
+                                 << b.size[1] << " " << b.size[2] << " k " << k;
       shown += kept;
       hidden += !kept;
-      in_gap += kept && k < s.from;
+      const float metres_per_px = static_cast<float>(1.0 / k);
+      points += kept && chooseForm(b, metres_per_px, float(kThinPx) * metres_per_px,
+                                   float(kMinThinPx) * metres_per_px).shape == Shape::Point;
     }
   }
-  // Every case was met: shown and hidden, and points below a thin thing's `from`.
+  // Every case was met: shown, hidden, and shown as a point.
   EXPECT_GT(shown, 10000);
   EXPECT_GT(hidden, 10000);
-  EXPECT_GT(gaps, 1000);
-  EXPECT_GT(in_gap, 100);
+  EXPECT_GT(points, 1000);
 }
 
-TEST(ShownScales, InvalidInstancesNeverShowAndZeroSizedOnesFollowTheFeatureTest) {
+// Whatever shows at a scale shows at every larger one: nearer never hides what farther drew.
+// (Points used to be judged by their largest size and ribbons by their second: a rail post 1 m
+// long and 5 cm thick was a pixel from 1.7 m a pixel and nothing from 1 m a pixel to 12 cm.)
+TEST(ShownFrom, WhatShowsAtOneScaleShowsAtEveryLargerOne) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> log_scale(-3.0, 4.0);
+  int checked = 0;
+  for (int n = 0; n < 20000; ++n) {
+    const InstanceBounds b = randomBounds(rng);
+    const double k = std::pow(10.0, log_scale(rng));
+    if (!chosen(b, k)) continue;
+    for (double larger : {1.01, 1.5, 3.0, 10.0, 100.0}) {
+      EXPECT_TRUE(chosen(b, k * larger)) << "type " << int(b.type) << " size " << b.size[0]
+                                         << " " << b.size[1] << " " << b.size[2] << " k " << k
+                                         << " then " << k * larger;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 20000);
+}
+
+// Thin in all three directions: a point only when its second largest size shows.
+TEST(ShownFrom, APointStandsForItsSecondLargestSize) {
+  auto box = [](float x, float y, float z) {
+    InstanceBounds b;
+    b.flags = kValid;
+    b.type = uint8_t(pkg::PrimitiveType::Box);
+    b.size = {0.5f * x, 0.5f * y, 0.5f * z};
+    b.radius = 0.5f * std::sqrt(x * x + y * y + z * z);
+    return b;
+  };
+  auto tube = [](float diameter, float length) {
+    InstanceBounds b;
+    b.flags = kValid;
+    b.type = uint8_t(pkg::PrimitiveType::Cylinder);
+    b.size = {0.5f * diameter, length, 0.0f};
+    b.radius = 0.5f * std::sqrt(diameter * diameter + length * length);
+    return b;
+  };
+  auto form = [](const InstanceBounds& b, double k) {
+    const float metres_per_px = static_cast<float>(1.0 / k);
+    return chooseForm(b, metres_per_px, float(kThinPx) * metres_per_px,
+                      float(kMinThinPx) * metres_per_px).shape;
+  };
+  // Seen at 0.8 px a metre (a far view of a large plant): every one of them is under a pixel.
+  const double k = 0.8;
+  EXPECT_EQ(form(box(1.2f, 0.05f, 0.05f), k), Shape::None);   // a rail post: 0.04 px thick
+  EXPECT_EQ(form(box(1.2f, 1.0f, 0.03f), k), Shape::Point);   // a grating panel: 0.96 x 0.8 px
+  EXPECT_EQ(form(tube(1.0f, 0.05f), k), Shape::Point);        // a flange seen face on: 0.8 px
+  EXPECT_EQ(form(tube(0.05f, 1.2f), k), Shape::None);         // a pipe stub: 0.04 px thick
+  EXPECT_FALSE(chosen(box(1.2f, 0.05f, 0.05f), k));
+  EXPECT_TRUE(chosen(box(1.2f, 1.0f, 0.03f), k));
+  // Each shows from the scale at which its second largest size is min_thin_px.
+  EXPECT_NEAR(shownFrom(box(1.2f, 0.05f, 0.05f), kThinPx, kMinThinPx, 0.0), kMinThinPx / 0.05,
+              1e-4);
+  EXPECT_NEAR(shownFrom(tube(1.0f, 0.05f), kThinPx, kMinThinPx, 0.0), kMinThinPx / 1.0, 1e-6);
+}
+
+TEST(ShownFrom, InvalidInstancesNeverShowAndZeroSizedOnesFollowTheFeatureTest) {
   InstanceBounds invalid;
-  EXPECT_TRUE(std::isinf(shownScales(invalid, kThinPx, kMinThinPx, kMinFeaturePx).from));
+  EXPECT_TRUE(std::isinf(shownFrom(invalid, kThinPx, kMinThinPx, kMinFeaturePx)));
   InstanceBounds flat;  // a box of zero thickness both ways across: a ribbon of zero width
   flat.flags = kValid;
   flat.type = uint8_t(pkg::PrimitiveType::Box);
   flat.size = {2.0f, 0.0f, 0.0f};
   flat.radius = 2.0f;
-  const ShownScales s = shownScales(flat, kThinPx, kMinThinPx, kMinFeaturePx);
-  EXPECT_DOUBLE_EQ(s.from, kMinFeaturePx / 4.0);
+  EXPECT_DOUBLE_EQ(shownFrom(flat, kThinPx, kMinThinPx, kMinFeaturePx), kMinFeaturePx / 4.0);
   EXPECT_TRUE(chosen(flat, 0.3));
   EXPECT_FALSE(chosen(flat, 0.2));
 }

@@ -820,8 +820,8 @@ TEST_F(ParametricRendering, DrawnInFlushedPartsDrawsWhatOneDrawDraws) {
 
 // A far view visits only the instances its distance lets show (InstanceScaleIndex): the frame,
 // and every count, must be the one testing each instance gives. Rows of everything that can be
-// too small to show from afar: thin pipes long and short (the short ones points, the long ones
-// nothing), spheres, beams, elbows and boxes, at distances from near to far.
+// too small to show from afar: thin long pipes (ribbons or nothing), short wide ones like flanges
+// (points from afar), spheres, beams, elbows and boxes, at distances from near to far.
 TEST_F(ParametricRendering, ScaleIndexDrawsWhatTestingEveryInstanceDraws) {
   std::vector<Part> parts;
   uint32_t id = 1;
@@ -831,7 +831,7 @@ TEST_F(ParametricRendering, ScaleIndexDrawsWhatTestingEveryInstanceDraws) {
       const double x = -6.0 + 1.1 * k;
       parts.push_back({id++, Cylinder{0.02f + 0.01f * float(k % 3), 4.0f, false},
                        placed({x, y, 0.0}, {90, 0, 0})});
-      parts.push_back({id++, Cylinder{0.03f, 0.15f + 0.1f * float(k % 4), true},
+      parts.push_back({id++, Cylinder{0.05f + 0.03f * float(k % 3), 0.04f + 0.03f * float(k % 4), true},
                        placed({x, y + 2.0, 1.0})});
       parts.push_back({id++, Sphere{0.02f + 0.03f * float(k % 4)}, placed({x, y + 4.0, 2.0})});
       parts.push_back({id++, Box{{0.02f, 0.03f, 1.5f}}, placed({x, y + 6.0, 0.5}, {0, 90, 0})});
