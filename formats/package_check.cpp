@@ -13,6 +13,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "covered_box_faces.h"
 #include "package_writer.h"
 #include "sealed_pipe_runs.h"
 
@@ -189,7 +190,7 @@ class Checker {
 
   CheckReport run() {
     // Each stage runs only if the ones before it passed.
-    (void)(checksums() && references() && sealedRuns() && errors() && bounds() &&
+    (void)(checksums() && references() && sealedRuns() && boxFaces() && errors() && bounds() &&
            (!options_.cracks || cracks()));
     return std::move(report_);
   }
@@ -313,6 +314,28 @@ class Checker {
         return fail("sealed runs",
                     "instance " + str(i) + " has sealed-run flags " + str(stored) +
                         " but the search finds " + str(found) + " (member 2, closer 4)",
+                    recordAt(SectionType::Instances, i, sizeof(pkg::InstanceRecord)));
+    }
+    endStage(progress_);
+    return !cancelled();
+  }
+
+  // (b3) Covered box faces: in a marked package, every box's are what the search finds (a wrong
+  // one would leave a hole where a box's side shows).
+  bool boxFaces() {
+    if (!(view_.header().flags & pkg::kHeaderCoveredFacesMarked)) return true;
+    beginStage(progress_, "box faces", 0);
+    const auto instances = view_.instances();
+    std::vector<uint32_t> object_layers;
+    object_layers.reserve(view_.objects().size());
+    for (const pkg::ObjectRecord& o : view_.objects()) object_layers.push_back(o.layer);
+    const std::vector<uint8_t> faces = findCoveredBoxFaces(instances, object_layers);
+    for (uint32_t i = 0; i < instances.size(); ++i) {
+      const uint32_t stored = tw::coveredFaces(instances[i].flags), found = faces[i];
+      if (stored != found)
+        return fail("box faces",
+                    "instance " + str(i) + " has covered faces " + str(stored) +
+                        " but the search finds " + str(found) + " (bit f: -X, +X, -Y, +Y, -Z, +Z)",
                     recordAt(SectionType::Instances, i, sizeof(pkg::InstanceRecord)));
     }
     endStage(progress_);

@@ -8,6 +8,8 @@
 //               overlapping, header totals (level count, level-0 triangles, largest cluster)
 //   sealed runs in a package marked kHeaderSealedRunsMarked, every instance's sealed-run flags
 //               are what findSealedRuns finds (sealed_pipe_runs.h)
+//   box faces   in a package marked kHeaderCoveredFacesMarked, every box's covered-face flags
+//               are what findCoveredBoxFaces finds (covered_box_faces.h)
 //   errors      monotone toward the roots, group records agreeing with their clusters, lod
 //               spheres shared by siblings and growing toward the roots
 //   bounds      every decoded vertex inside its cluster's box and sphere (and produced

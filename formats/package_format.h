@@ -21,6 +21,9 @@
 //       kInstanceSealedRunMember and kInstanceSealedRunCloser, and header flag
 //       kHeaderSealedRunsMarked saying the search ran (the runtime no longer runs it at start-up;
 //       without the mark it still does). Earlier packages stay valid; a 1.3 view rejects them.
+//   1.5 (2026-11) box faces covered by another box's face (covered_box_faces.h): instance flags
+//       kInstanceCoveredFaces, and header flag kHeaderCoveredFacesMarked saying the search ran.
+//       Earlier packages stay valid (nothing is marked); a 1.4 view rejects marked ones.
 #pragma once
 
 #include <bit>
@@ -35,7 +38,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 4;
+inline constexpr uint32_t kMinorVersion = 5;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -90,7 +93,8 @@ struct PackageHeader {
   uint32_t header_bytes;         // sizeof(PackageHeader) == 256
   uint32_t section_entry_bytes;  // sizeof(SectionEntry) == 48
   uint32_t section_count;        // >= kSectionCount; entries past it are bounds-checked, ignored
-  uint32_t flags;                // kHeaderSealedRunsMarked; a view rejects bits it does not know
+  uint32_t flags;                // kHeaderSealedRunsMarked, kHeaderCoveredFacesMarked; a view
+                                 // rejects bits it does not know
   uint64_t file_bytes;           // size of the whole file: a truncated file fails at once
   uint64_t input_hash;           // XXH3-64 of the inputs and options, from the preprocessor
   // Struct sizes, so a mismatched build fails loudly rather than misreading records.
@@ -123,7 +127,10 @@ static_assert(offsetof(PackageHeader, header_checksum) == 248);
 // search's result (sealed_pipe_runs.h), none set meaning "not in a sealed run"; without this bit
 // the instances carry none and a reader that wants the roles searches itself.
 inline constexpr uint32_t kHeaderSealedRunsMarked = 1u << 0;
-inline constexpr uint32_t kKnownHeaderFlags = kHeaderSealedRunsMarked;
+// Covered box faces marked: every Box instance's kInstanceCoveredFaces bits are the search's
+// (covered_box_faces.h).
+inline constexpr uint32_t kHeaderCoveredFacesMarked = 1u << 1;
+inline constexpr uint32_t kKnownHeaderFlags = kHeaderSealedRunsMarked | kHeaderCoveredFacesMarked;
 
 // One entry of the section table.
 struct SectionEntry {
@@ -239,8 +246,14 @@ inline constexpr uint32_t kInstanceCapped = 1u << 0;  // Cylinder and Cone
 // tube, cone or elbow of the run, and a capped cylinder that closes one of its ends.
 inline constexpr uint32_t kInstanceSealedRunMember = 1u << 1;
 inline constexpr uint32_t kInstanceSealedRunCloser = 1u << 2;
-inline constexpr uint32_t kKnownInstanceFlags =
-    kInstanceCapped | kInstanceSealedRunMember | kInstanceSealedRunCloser;
+// Faces of a box covered by another box's face (covered_box_faces.h; Box only, and only with
+// kHeaderCoveredFacesMarked): bit 3 + f for face f of -X, +X, -Y, +Y, -Z, +Z.
+inline constexpr uint32_t kInstanceCoveredFaceShift = 3;
+inline constexpr uint32_t kInstanceCoveredFaces = 0x3fu << kInstanceCoveredFaceShift;
+// The flags the preprocessor's searches set (PackageStorage::addInstance's role flags).
+inline constexpr uint32_t kInstanceSearchedFlags =
+    kInstanceSealedRunMember | kInstanceSealedRunCloser | kInstanceCoveredFaces;
+inline constexpr uint32_t kKnownInstanceFlags = kInstanceCapped | kInstanceSearchedFlags;
 
 // One parametric primitive, placed by an affine map from its canonical frame (scene.h) into the
 // package frame. params by type (unused = 0), as in the .tws format:

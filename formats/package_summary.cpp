@@ -2,6 +2,7 @@
 #include "package_summary.h"
 
 #include <algorithm>
+#include <bit>
 #include <limits>
 
 namespace tw {
@@ -78,10 +79,12 @@ PackageSummary summarizePackage(const PackageView& view) {
 
   s.instances = instances.size();
   s.sealed_runs_marked = (view.header().flags & pkg::kHeaderSealedRunsMarked) != 0;
+  s.covered_faces_marked = (view.header().flags & pkg::kHeaderCoveredFacesMarked) != 0;
   for (const pkg::InstanceRecord& in : instances) {
     ++s.instances_by_type[in.type];
     s.sealed_run_members += (in.flags & pkg::kInstanceSealedRunMember) != 0;
     s.sealed_run_closers += (in.flags & pkg::kInstanceSealedRunCloser) != 0;
+    s.covered_box_faces += uint64_t(std::popcount(in.flags & pkg::kInstanceCoveredFaces));
   }
   s.profile_points = view.profilePoints().size();
 

@@ -55,6 +55,8 @@ struct PackageSummary {
   uint64_t instances = 0, profile_points = 0;
   bool sealed_runs_marked = false;  // kHeaderSealedRunsMarked: the counts below are the search's
   uint64_t sealed_run_members = 0, sealed_run_closers = 0;
+  bool covered_faces_marked = false;  // kHeaderCoveredFacesMarked: the count below is the search's
+  uint64_t covered_box_faces = 0;
   uint64_t objects = 0, objects_with_db_key = 0;
   uint64_t closed_objects = 0;  // kObjectClosedSurface: back faces may be culled
   struct Layer {

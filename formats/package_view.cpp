@@ -315,8 +315,15 @@ void PackageView::validate(Verify verify) {
     if (in.type >= kPrimitiveTypeCount)
       fail(offsetOf(&in.type), "unknown primitive type " + str(in.type));
     if (in.flags & ~kKnownInstanceFlags) fail(offsetOf(&in.flags), "unknown instance flags");
-    if ((in.flags & ~kInstanceCapped) && !(h.flags & kHeaderSealedRunsMarked))
+    if ((in.flags & (kInstanceSealedRunMember | kInstanceSealedRunCloser)) &&
+        !(h.flags & kHeaderSealedRunsMarked))
       fail(offsetOf(&in.flags), "instance has sealed-run flags but the header does not mark them");
+    if (in.flags & kInstanceCoveredFaces) {
+      if (!(h.flags & kHeaderCoveredFacesMarked))
+        fail(offsetOf(&in.flags), "instance has covered-face flags but the header does not mark them");
+      if (in.type != static_cast<uint32_t>(PrimitiveType::Box))
+        fail(offsetOf(&in.flags), "instance has covered-face flags but is not a box");
+    }
     if (in.reserved != 0) fail(offsetOf(&in.reserved), "instance reserved field is not zero");
     if (in.object >= objects_.size())
       fail(offsetOf(&in.object), "instance object " + str(in.object) + " is out of range");

@@ -498,8 +498,10 @@ pkg::InstanceRecord placedInstanceRecord(const Primitive& primitive, const Trans
 
 uint32_t PackageStorage::addInstance(const Primitive& primitive, const Transform& transform,
                                      uint32_t object, uint32_t role_flags) {
-  if (role_flags & ~(kInstanceSealedRunMember | kInstanceSealedRunCloser))
+  if (role_flags & ~kInstanceSearchedFlags)
     throw std::invalid_argument("package: instance role flags has unknown bits");
+  if ((role_flags & kInstanceCoveredFaces) && !std::holds_alternative<Box>(primitive))
+    throw std::invalid_argument("package: covered faces on an instance that is not a box");
   const uint64_t profile_base = profilePointCount() - profile_points.size();
   InstanceRecord r = makeInstanceRecord(primitive, transform, object, origin, profile_points);
   r.flags |= role_flags;
@@ -614,7 +616,8 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   std::memcpy(h.magic, kMagic, sizeof(kMagic));
   h.version = kVersion;
   h.minor_version = kMinorVersion;
-  h.flags = storage.sealed_runs_marked ? kHeaderSealedRunsMarked : 0;
+  h.flags = (storage.sealed_runs_marked ? kHeaderSealedRunsMarked : 0) |
+            (storage.covered_faces_marked ? kHeaderCoveredFacesMarked : 0);
   h.header_bytes = sizeof(PackageHeader);
   h.section_entry_bytes = sizeof(SectionEntry);
   h.section_count = kSectionCount;

@@ -65,6 +65,8 @@ struct PackageStorage {
   // The instances carry the sealed-run search's roles (addInstance's role flags): the header gets
   // kHeaderSealedRunsMarked. Left false, no instance may have them (writePackage refuses).
   bool sealed_runs_marked = false;
+  // Likewise the covered box faces (kInstanceCoveredFaces): kHeaderCoveredFacesMarked.
+  bool covered_faces_marked = false;
 
   std::vector<pkg::ClusterRecord> clusters;
   std::vector<pkg::GroupRecord> groups;
@@ -135,8 +137,8 @@ struct PackageStorage {
   // Appends `primitive`, placed by `transform` (its origin is world metres; stored relative to
   // this package's origin), as an instance of object index `object`, with its profile points;
   // returns the instance index. `role_flags`: kInstanceSealedRunMember / Closer (see
-  // sealed_runs_marked). Throws std::invalid_argument for parameters the format forbids and
-  // for other role bits.
+  // sealed_runs_marked), kInstanceCoveredFaces on a box (see covered_faces_marked). Throws
+  // std::invalid_argument for parameters the format forbids and for other role bits.
   uint32_t addInstance(const Primitive& primitive, const Transform& transform, uint32_t object,
                        uint32_t role_flags = 0);
   // Appends a parametric cluster over instances [first_instance, first_instance + count), which

@@ -119,7 +119,7 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
 std::vector<uint32_t> addParametricClusters(std::span<const ParametricItem> items,
                                             const ParametricClustering& clustering,
                                             PackageStorage& storage,
-                                            std::span<const uint8_t> role_flags) {
+                                            std::span<const uint16_t> role_flags) {
   const size_t count = clustering.clusterCount();
   if (!role_flags.empty() && role_flags.size() != items.size())
     throw std::invalid_argument("addParametricClusters: role flags do not match the items");

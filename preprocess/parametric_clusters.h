@@ -72,12 +72,12 @@ ParametricClustering clusterPrimitives(std::span<const ParametricItem> items,
 // one parametric cluster each with addParametricCluster (LOD as in the file comment). Returns
 // the storage index of each cluster. `clustering` must come from clusterPrimitives(items,
 // storage.origin, ...); objects must already be in storage (object ids are checked by
-// writePackage). `role_flags`, by item index, are passed to addInstance (sealed runs,
-// sealed_run_marking.h; empty: none). Throws std::invalid_argument on a clustering or role flags
-// that do not match the items.
+// writePackage). `role_flags`, by item index, are passed to addInstance (sealed runs and
+// covered box faces, instance_flag_marking.h; empty: none). Throws std::invalid_argument on a
+// clustering or role flags that do not match the items.
 std::vector<uint32_t> addParametricClusters(std::span<const ParametricItem> items,
                                             const ParametricClustering& clustering,
                                             PackageStorage& storage,
-                                            std::span<const uint8_t> role_flags = {});
+                                            std::span<const uint16_t> role_flags = {});
 
 }  // namespace tw

@@ -526,7 +526,7 @@ class ClusterCutter {
       throw std::logic_error("parametric sort: more items of a type than counted");
     // Refused here, as the item arrives, so its run is named; added when its cluster is whole.
     (void)placedInstanceRecord(item.primitive, item.transform, item.object, storage_.origin);
-    if (role_flags & ~uint32_t(pkg::kInstanceSealedRunMember | pkg::kInstanceSealedRunCloser))
+    if (role_flags & ~pkg::kInstanceSearchedFlags)
       throw std::invalid_argument("parametric sort: unknown instance role flags");
     pending_.push_back({item, role_flags, parametricShowWidth(item.primitive, item.transform)});
     ++pos_;

@@ -39,9 +39,9 @@ struct ParametricSortOptions {
   // bytes per run.
   uint64_t memory_budget_bytes = 64ull << 20;
   uint32_t max_per_cluster = 256;           // as clusterPrimitives
-  // By input item index: role flags for PackageStorage::addInstance (sealed runs,
-  // sealed_run_marking.h), or empty for none. Another size throws std::invalid_argument.
-  std::span<const uint8_t> instance_role_flags;
+  // By input item index: role flags for PackageStorage::addInstance (sealed runs, covered box
+  // faces: instance_flag_marking.h), or empty for none. Another size throws std::invalid_argument.
+  std::span<const uint16_t> instance_role_flags;
 };
 
 struct ParametricSortStats {

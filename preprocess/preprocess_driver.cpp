@@ -15,13 +15,13 @@
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
+#include "instance_flag_marking.h"
 #include "package_assembly.h"
 #include "package_rewrite.h"
 #include "package_view.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "parametric_external_sort.h"
-#include "sealed_run_marking.h"
 #include "quantization_snap.h"
 #include "scene_bricking.h"
 #include "visibility_build.h"
@@ -370,7 +370,9 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
   storage.spillTablesTo(bricking.work_dir / "tables",
                         std::clamp<uint64_t>(options.memory_budget_bytes / 1024, 1024, 4u << 20));
   for (const Layer& layer : scene.layers) storage.addLayer(layer);
+  std::vector<uint32_t> object_layers;  // for the covered-face search: 4 bytes an object
   forEachObject(scene, [&](const BrickedObject& object) {
+    object_layers.push_back(object.layer);
     ObjectInfo info;
     info.id = object.source_id;
     info.name = object.name;
@@ -422,12 +424,16 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
           sink(items);
         });
       };
-  // Sealed pipe runs, searched once here rather than at every start of the runtime.
-  const SealedRunMarking sealed = markSealedRuns(parametrics, storage.origin);
-  sort_options.instance_role_flags = sealed.role_flags;
+  // Sealed pipe runs and covered box faces, searched once here rather than at every start of
+  // the runtime.
+  const InstanceFlagMarking marked = markInstanceFlags(parametrics, storage.origin, object_layers);
+  object_layers = {};
+  sort_options.instance_role_flags = marked.role_flags;
   storage.sealed_runs_marked = true;
-  report.sealed_run_members = sealed.stats.sealed_members;
-  report.sealed_run_closers = sealed.stats.closers;
+  storage.covered_faces_marked = true;
+  report.sealed_run_members = marked.sealed.sealed_members;
+  report.sealed_run_closers = marked.sealed.closers;
+  report.covered_box_faces = marked.covered.covered_faces;
   const ParametricSortStats sorted = addParametricClustersOutOfCore(parametrics, sort_options, storage);
   report.parametric_clusters = sorted.clusters;
   report.parametric_sort_runs = sorted.runs;

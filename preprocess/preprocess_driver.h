@@ -85,6 +85,7 @@ struct PreprocessReport {
   uint64_t triangles_turned = 0;      // mesh triangles reversed to agree with their piece
   uint64_t sealed_run_members = 0;    // instances marked as open parts of sealed pipe runs
   uint64_t sealed_run_closers = 0;    // and as the capped cylinders closing them
+  uint64_t covered_box_faces = 0;     // box faces marked as covered by another box's face
   uint64_t package_bytes = 0;
   VisibilitySummary visibility;
   uint64_t peak_rss_bytes = 0;

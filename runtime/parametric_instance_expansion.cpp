@@ -129,7 +129,18 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
   const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
   std::vector<uint32_t>& out = batch.indices[f.batch];
   const uint32_t* unit_indices = unit.indices.data() + mesh.first_index;
+  // A box's faces that another box's face covers are left out: the unit box holds two triangles
+  // a face, in the bits' order.
+  const uint32_t covered = f.shape == Shape::Box ? b.covered_faces : 0u;
+  auto face_covered = [&](uint32_t k) { return ((covered >> (k / 6)) & 1u) != 0; };
   if (f.batch == kTwoSided || f.batch == kPoints) {
+    if (covered) {
+      for (uint32_t k = 0; k + 2 < count; k += 3)
+        if (!face_covered(k))
+          out.insert(out.end(), {base + unit_indices[k], base + unit_indices[k + 1],
+                                 base + unit_indices[k + 2]});
+      return;
+    }
     for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit_indices[k]);
     return;
   }
@@ -139,6 +150,7 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
   // the triangle's plane); edge-on triangles are kept.
   const float front = f.batch == kCullCw ? -1.0f : 1.0f;
   for (uint32_t k = 0; k + 2 < count; k += 3) {
+    if (covered && face_covered(k)) continue;
     const glm::vec3& a = vertices[base + unit_indices[k]].position;
     const glm::vec3& b1 = vertices[base + unit_indices[k + 1]].position;
     const glm::vec3& c1 = vertices[base + unit_indices[k + 2]].position;

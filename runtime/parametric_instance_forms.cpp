@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 
+#include "covered_box_faces.h"
 #include "parametric_meshes.h"
 #include "parametric_unit_meshes.h"
 
@@ -109,6 +110,7 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   const bool finite = std::isfinite(b.radius) && std::isfinite(b.centre.x) &&
                       std::isfinite(b.centre.y) && std::isfinite(b.centre.z);
   b.origin = glm::vec3(origin - anchor);
+  if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Box)) b.covered_faces = coveredFaces(in.flags);
   if (in.type == static_cast<uint32_t>(pkg::PrimitiveType::Cylinder) ||
       in.type == static_cast<uint32_t>(pkg::PrimitiveType::Cone))
     b.axis = linear[2] * b.size[1] / std::max(scale.z, 1e-30f);

@@ -76,6 +76,9 @@ struct InstanceBounds {
   uint8_t type = 0;
   uint8_t flags = 0;       // kValid, kCapped, kMirrored, kRectangleProfile, kOrthogonalAxes,
                            // kRunMember, kRunCloser, kClosedProfile
+  // A box's faces that another box's face covers (covered_box_faces.h): bit f for face f of
+  // -X, +X, -Y, +Y, -Z, +Z, the unit box's order. Left out of its surface.
+  uint8_t covered_faces = 0;
 };
 
 // An open tube's inside can only be seen through its end discs, so from an eye between the two

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "cluster_dag.h"
+#include "covered_box_faces.h"
 #include "obj_reader.h"
 #include "package_assembly.h"
 #include "package_check.h"
@@ -333,6 +334,40 @@ TEST(PackageCheck, SealedRunFlagsMustBeTheSearchResult) {
 
   s.sealed_runs_marked = false;
   EXPECT_THROW(writeAndOpen(s, "unmarked.twk"), std::invalid_argument);
+}
+
+// Two plates side by side: a package marked as holding the covered-face search's result passes
+// while the flags are the search's; a face it does not find fails, naming the instance; an
+// unmarked package may not carry such flags, nor may anything but a box.
+TEST(PackageCheck, CoveredFaceFlagsMustBeTheSearchResult) {
+  PackageStorage s = makeDag();
+  s.covered_faces_marked = true;
+  Transform left, right;
+  left.origin = s.origin + glm::dvec3(3.5, 1.0, 0.0);
+  right.origin = s.origin + glm::dvec3(4.5, 1.0, 0.0);
+  const Box plate{glm::vec3(0.5f, 0.5f, 0.05f)};
+  constexpr uint8_t kPlusX = 2, kMinusX = 1;
+  s.addInstance(plate, left, 1, coveredFaceInstanceFlags(kPlusX));
+  s.addInstance(plate, right, 1, coveredFaceInstanceFlags(kMinusX));
+  s.addParametricCluster(1, 2, ClusterLod{});
+  CheckReport marked = check(s);
+  EXPECT_TRUE(marked.ok()) << describe(marked);
+  EXPECT_TRUE(writeAndOpen(s).header().flags & pkg::kHeaderCoveredFacesMarked);
+
+  s.instances[2].flags |= coveredFaceInstanceFlags(8);  // +Y: nothing there
+  CheckReport r = check(s);
+  ASSERT_TRUE(r.failure);
+  EXPECT_EQ(r.failure->check, "box faces");
+  EXPECT_NE(r.failure->what.find("instance 2 has covered faces 9 but the search finds 1"),
+            std::string::npos)
+      << r.failure->what;
+
+  s.covered_faces_marked = false;
+  EXPECT_THROW(writeAndOpen(s, "unmarked-faces.twk"), std::invalid_argument);
+  Transform t;
+  t.origin = s.origin;
+  EXPECT_THROW(s.addInstance(Cylinder{0.1f, 1.0f, true}, t, 1, coveredFaceInstanceFlags(1)),
+               std::invalid_argument);
 }
 
 TEST(PackageCheck, ObjectBoxMustHoldItsLevel0Triangles) {

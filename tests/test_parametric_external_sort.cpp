@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "covered_box_faces.h"
 #include "parametric_external_sort.h"
 #include "test_support.h"
 
@@ -93,7 +94,7 @@ tw::ParametricStream streamOf(const std::vector<ParametricItem>& items, size_t b
 }
 
 PackageStorage reference(const std::vector<ParametricItem>& items, uint32_t max_per_cluster,
-                         std::span<const uint8_t> role_flags = {}) {
+                         std::span<const uint16_t> role_flags = {}) {
   PackageStorage storage;
   storage.origin = kOrigin;
   tw::addParametricClusters(items, tw::clusterPrimitives(items, kOrigin, max_per_cluster),
@@ -130,7 +131,7 @@ struct Outcome {
 
 Outcome sortOutOfCore(const std::vector<ParametricItem>& items, uint64_t budget,
                       uint32_t max_per_cluster, const std::filesystem::path& work_dir,
-                      std::span<const uint8_t> role_flags = {}) {
+                      std::span<const uint16_t> role_flags = {}) {
   Outcome out;
   out.storage.origin = kOrigin;
   tw::ParametricSortOptions options;
@@ -199,22 +200,33 @@ TEST(ParametricExternalSort, ProfilesForceManyRunsAndSeveralMerges) {
   }
 }
 
-// Role flags (sealed runs) are given by input index and must reach each item's own record, in
-// memory and through run files alike; a list of the wrong length is refused.
+// Role flags (sealed runs, covered box faces) are given by input index and must reach each
+// item's own record, in memory and through run files alike; a list of the wrong length is refused.
 TEST(ParametricExternalSort, RoleFlagsFollowTheirItems) {
   const auto items = makeItems(20000, 5);
-  std::vector<uint8_t> flags(items.size());
+  std::vector<uint16_t> flags(items.size());
   std::mt19937 rng(9);
-  const uint8_t choices[] = {0, tw::pkg::kInstanceSealedRunMember, tw::pkg::kInstanceSealedRunCloser,
-                             tw::pkg::kInstanceSealedRunMember | tw::pkg::kInstanceSealedRunCloser};
-  for (uint8_t& f : flags) f = choices[rng() % 4];
+  const uint16_t choices[] = {0, tw::pkg::kInstanceSealedRunMember, tw::pkg::kInstanceSealedRunCloser,
+                              tw::pkg::kInstanceSealedRunMember | tw::pkg::kInstanceSealedRunCloser};
+  int boxes = 0;
+  for (size_t i = 0; i < items.size(); ++i) {
+    flags[i] = choices[rng() % 4];
+    if (std::holds_alternative<tw::Box>(items[i].primitive)) {
+      flags[i] |= uint16_t(tw::coveredFaceInstanceFlags(uint8_t(rng() % 64)));
+      ++boxes;
+    }
+  }
+  EXPECT_GT(boxes, 100);
   const PackageStorage expected = reference(items, 64, flags);
   // Against the items' own flags: records keep each item's object, so count by object.
-  std::map<uint32_t, std::pair<int, int>> by_object;  // object -> (members given, members stored)
-  for (size_t i = 0; i < items.size(); ++i)
-    by_object[items[i].object].first += (flags[i] & tw::pkg::kInstanceSealedRunMember) != 0;
+  std::map<uint32_t, std::pair<int, int>> by_object;  // object -> (flags given, flags stored)
+  auto weight = [](uint32_t f) {  // members, and covered faces apart from them
+    return int((f & tw::pkg::kInstanceSealedRunMember) != 0) +
+           1000 * int(tw::coveredFaces(f));
+  };
+  for (size_t i = 0; i < items.size(); ++i) by_object[items[i].object].first += weight(flags[i]);
   for (const tw::pkg::InstanceRecord& in : expected.instances)
-    by_object[in.object].second += (in.flags & tw::pkg::kInstanceSealedRunMember) != 0;
+    by_object[in.object].second += weight(in.flags);
   for (const auto& [object, counts] : by_object) EXPECT_EQ(counts.first, counts.second) << object;
   const auto work = tw::test::scratchDir() / "work";
   for (uint64_t budget : {64 * kMiB, kMiB}) {
@@ -225,7 +237,7 @@ TEST(ParametricExternalSort, RoleFlagsFollowTheirItems) {
       EXPECT_GE(got.stats.runs, 2u);
     }
   }
-  const std::vector<uint8_t> short_list(items.size() - 1, 0);
+  const std::vector<uint16_t> short_list(items.size() - 1, 0);
   PackageStorage storage;
   storage.origin = kOrigin;
   tw::ParametricSortOptions options;

@@ -294,6 +294,54 @@ TEST_F(ParametricRendering, UnmarkedPackageIsSearchedAtStartUp) {
   EXPECT_EQ(culled.ids, marked.ids);
 }
 
+// A deck of twelve plates, one per bay, meeting edge to edge: the preprocessor marks the sides
+// they share (covered_box_faces.h) and the runtime leaves those faces out. Seen from outside, the
+// frame is the one an unmarked package of the same plates gives, for fewer triangles.
+TEST_F(ParametricRendering, CoveredBoxFacesAreLeftOutAndTheFrameStaysTheSame) {
+  std::vector<Part> parts;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x)
+      parts.push_back({uint32_t(1 + y * 4 + x), Box{glm::vec3(4.0f, 3.5f, 0.075f)},
+                       placed({4.0 + 8.0 * x, 3.5 + 7.0 * y, -0.075}),
+                       0xff000000u | (0x203040u * uint32_t(1 + (x + y) % 3))});
+  const fs::path marked_package = buildPackage("covered_deck", parts, false);
+  ASSERT_TRUE(PackageView::open(marked_package, PackageView::Verify::Headers).header().flags &
+              pkg::kHeaderCoveredFacesMarked);
+
+  PackageStorage storage;
+  storage.origin = glm::dvec3(0.0);
+  storage.addLayer({"parts", 0xff909090u});
+  std::vector<ParametricItem> items;
+  for (const Part& part : parts) {
+    ObjectInfo info;
+    info.id = part.id;
+    info.name = "part " + std::to_string(part.id);
+    info.color_rgba = part.color;
+    const uint32_t object = storage.addObject(info, glm::vec3(-40.0f), glm::vec3(40.0f));
+    items.push_back({object, part.primitive, part.transform});
+  }
+  addParametricClusters(items, clusterPrimitives(items, storage.origin), storage);
+  const fs::path unmarked = test::processScratchDir("parametric_renderer") / "uncovered_deck.twk";
+  writePackage(storage, unmarked);
+
+  // From above and from below the deck, looking across it.
+  for (const Camera& camera : {lookingAt({-8.0, -9.0, 9.0}, {16.0, 10.5, 0.0}),
+                               lookingAt({40.0, 30.0, -7.0}, {16.0, 10.5, 0.0})}) {
+    const Frame covered = render(marked_package, camera, ParametricMode::Tessellated);
+    const Frame every = render(unmarked, camera, ParametricMode::Tessellated);
+    EXPECT_EQ(covered.stats.parametric_instances_drawn, 12u);
+    EXPECT_EQ(every.stats.parametric_instances_drawn, 12u);
+    // Each plate shows its top or bottom and up to two sides; 17 shared sides, about half of
+    // them facing the eye from each plate.
+    EXPECT_LE(covered.stats.parametric_triangles + 2u * 12u, every.stats.parametric_triangles);
+    uint64_t shown = 0;
+    for (uint32_t id : every.ids) shown += id != 0u;
+    EXPECT_GT(shown, 3000u);
+    EXPECT_EQ(covered.ids, every.ids);
+    EXPECT_EQ(covered.rgba, every.rgba);
+  }
+}
+
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
 // drawn with fewer segments, so the pair costs far less than twice the near one alone (a
 // per-cluster resolution would draw both at the near one's).

@@ -10,13 +10,13 @@
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
+#include "instance_flag_marking.h"
 #include "package_assembly.h"
 #include "package_check.h"
 #include "package_view.h"
 #include "package_writer.h"
 #include "parametric_clusters.h"
 #include "preprocess_driver.h"
-#include "sealed_run_marking.h"
 #include "test_support.h"
 #include "tws_writer.h"
 
@@ -52,6 +52,15 @@ fs::path writeScene(const fs::path& dir) {
     pipe.info.transform.origin = {500000.0 + i * 10.0, 7000000.0, 12.0};
     pipe.geometry = Primitive{Cylinder{0.1f, 8.0f, false}};
     writer.onObject(pipe);
+  }
+  for (int i = 0; i < 4; ++i) {  // a deck of four plates side by side: three shared sides
+    SceneObject plate;
+    plate.info.id = id++;
+    plate.info.name = "deck plate " + std::to_string(i);
+    plate.info.db_key = "DK-1";
+    plate.info.transform.origin = {500004.0 + i * 8.0, 7000003.5, 20.0};
+    plate.geometry = Primitive{Box{glm::vec3(4.0f, 3.5f, 0.075f)}};
+    writer.onObject(plate);
   }
   writer.finish();
   return path;
@@ -90,8 +99,9 @@ TEST(Preprocess, BuildsAValidPackageFromSeveralBricks) {
   PreprocessReport report = runPreprocess(optionsFor(input, output));
   EXPECT_GT(report.bricks, 3u);
   EXPECT_EQ(report.input_triangles, 144u * 768u);
-  EXPECT_EQ(report.primitives, 20u);
-  EXPECT_EQ(report.objects, 164u);
+  EXPECT_EQ(report.primitives, 24u);
+  EXPECT_EQ(report.objects, 168u);
+  EXPECT_EQ(report.covered_box_faces, 6u);  // each shared side, from both plates
   ASSERT_GE(report.triangles_per_level.size(), 3u);
   for (size_t level = 1; level < report.triangles_per_level.size(); ++level)
     EXPECT_LE(report.triangles_per_level[level], report.triangles_per_level[level - 1])
@@ -101,9 +111,12 @@ TEST(Preprocess, BuildsAValidPackageFromSeveralBricks) {
   EXPECT_FALSE(fs::exists(output.string() + ".work")) << "work directory left behind";
 
   PackageView view = PackageView::open(output, PackageView::Verify::All);
-  EXPECT_EQ(view.objects().size(), 164u);
+  EXPECT_EQ(view.objects().size(), 168u);
   EXPECT_EQ(view.layers().size(), 2u);
-  EXPECT_EQ(view.instances().size(), 20u);
+  EXPECT_EQ(view.instances().size(), 24u);
+  EXPECT_TRUE(view.header().flags & pkg::kHeaderCoveredFacesMarked);
+  const CheckReport checked = checkPackage(view);
+  EXPECT_TRUE(checked.ok());
 }
 
 TEST(Preprocess, ResumeAfterCancelGivesTheSameBytes) {
@@ -195,17 +208,20 @@ TEST(Preprocess, StreamedPackageEqualsTheInMemoryAssembly) {
                       object.closed_surface ? pkg::kObjectClosedSurface : 0u);
   });
   addDagToPackage(dag, storage);
+  std::vector<uint32_t> object_layers;
+  for (const pkg::ObjectRecord& o : storage.objects) object_layers.push_back(o.layer);
   std::vector<ParametricItem> items;
   forEachParametricBatch(*scene, 4096, [&](std::span<const ParametricRecord> batch) {
     for (const ParametricRecord& r : batch) items.push_back({r.object, r.primitive, r.transform});
   });
-  const SealedRunMarking sealed = markSealedRuns(
+  const InstanceFlagMarking marked = markInstanceFlags(
       [&](const std::function<void(std::span<const ParametricItem>)>& sink) { sink(items); },
-      storage.origin);
+      storage.origin, object_layers);
   storage.sealed_runs_marked = true;
+  storage.covered_faces_marked = true;
   addParametricClusters(items,
                         clusterPrimitives(items, storage.origin, options.parametric_cluster_size),
-                        storage, sealed.role_flags);
+                        storage, marked.role_flags);
   const fs::path in_memory = dir / "in_memory.twk";
   writePackage(storage, in_memory);
   EXPECT_GT(storage.pages.size(), 1u);

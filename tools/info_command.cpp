@@ -171,6 +171,7 @@ nlohmann::json packageToJson(const PackageSummary& s) {
   j["sealed_runs"] = {{"marked", s.sealed_runs_marked},
                       {"members", s.sealed_run_members},
                       {"closers", s.sealed_run_closers}};
+  j["covered_box_faces"] = {{"marked", s.covered_faces_marked}, {"faces", s.covered_box_faces}};
   j["objects"] = s.objects;
   j["objects_with_db_key"] = s.objects_with_db_key;
   j["closed_objects"] = s.closed_objects;
@@ -257,6 +258,9 @@ void printPackage(const PackageSummary& s, double seconds) {
                   ull(s.sealed_run_members), ull(s.sealed_run_closers));
     else
       std::printf("sealed runs not marked (the runtime searches at start-up)\n");
+    if (s.covered_faces_marked)
+      std::printf("box faces   %llu covered by another box's face (found by the preprocessor)\n",
+                  ull(s.covered_box_faces));
   }
   std::printf("objects     %llu (%llu with a database key, %llu closed solids)\n", ull(s.objects),
               ull(s.objects_with_db_key), ull(s.closed_objects));
