@@ -129,9 +129,9 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
   const uint32_t count = f.capped ? mesh.all_indices : mesh.side_indices;
   std::vector<uint32_t>& out = batch.indices[f.batch];
   const uint32_t* unit_indices = unit.indices.data() + mesh.first_index;
-  // A box's faces that another box's face covers are left out: the unit box holds two triangles
-  // a face, in the bits' order.
-  const uint32_t covered = f.shape == Shape::Box ? b.covered_faces : 0u;
+  // A box's faces that another box's face covers are left out, and a thin plate's rims
+  // (Form::thin_faces): the unit box holds two triangles a face, in the bits' order.
+  const uint32_t covered = f.shape == Shape::Box ? uint32_t(b.covered_faces | f.thin_faces) : 0u;
   auto face_covered = [&](uint32_t k) { return ((covered >> (k / 6)) & 1u) != 0; };
   if (f.batch == kTwoSided || f.batch == kPoints) {
     if (covered) {

@@ -177,10 +177,11 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
       break;
     }
     default: {  // box and profiles: thin in two directions, the box; in all three, a point
-      int thin_axes = 0, longest = 0;
+      int thin_axes = 0, longest = 0, thinnest = 0;
       for (int axis = 0; axis < 3; ++axis) {
         thin_axes += 2.0f * b.size[axis] < thin;
         if (b.size[axis] > b.size[longest]) longest = axis;
+        if (b.size[axis] < b.size[thinnest]) thinnest = axis;
       }
       f.shape = thin_axes == 3 ? Shape::Point : surfaceOf(b.type);
       if (thin_axes == 2) {
@@ -207,6 +208,12 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         f.box_frame = true;
       }
       // A revolution: half the tolerance for the angle, half for the profile (appendLathe).
+      // A plate's rims are as wide as the plate is thick: under min_thin they go as a ribbon that
+      // narrow would, and the plate is its two large faces.
+      if (f.shape == Shape::Box && thin_axes == 1 && 2.0f * b.size[thinnest] < min_thin) {
+        const uint32_t all = 0x3f, along = 3u << (2 * thinnest);
+        f.thin_faces = static_cast<uint8_t>(all & ~along);
+      }
       if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Revolution)) {
         f.shape = Shape::Lathe;
         f.a = levelIndex(arcSegments(std::max(b.size[0], b.size[1]), float(kTwoPi), 0.5f * tolerance));

@@ -109,13 +109,18 @@ struct Form {
   bool box_frame = false;  // shape points span the canonical box (not the primitive's formula)
   Batch batch = kTwoSided;
   uint8_t long_axis = 0;   // a box-framed ribbon: the canonical box axis it runs along
+  // A box thin along one axis (a plate) thinner there than the smallest thin form worth drawing:
+  // its faces along that axis (the rims), in the bits' order of InstanceBounds::covered_faces,
+  // which are left out as a thin form that narrow would be.
+  uint8_t thin_faces = 0;
 };
 
 // The form of one visible instance: each arc's chordal error within `tolerance` metres; a tube
 // or elbow thinner than `thin` metres across a ribbon, a box, extrusion or revolution thin in two
 // directions a ribbon along its longest axis, an instance thin in all three a point; any of these
-// whose second largest size (a tube's diameter) is under `min_thin`, nothing. Surfaces come
-// two-sided: cullBackFaces decides.
+// whose second largest size (a tube's diameter) is under `min_thin`, nothing; a box thin along
+// one axis, under `min_thin` there, without its rims. Surfaces come two-sided: cullBackFaces
+// decides.
 Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_thin);
 // The scale from which an instance shows at all, in pixels per metre at its nearest point (the
 // choice's pixel_scale / distance): below it the small-feature test (its bounding sphere below

@@ -342,6 +342,30 @@ TEST_F(ParametricRendering, CoveredBoxFacesAreLeftOutAndTheFrameStaysTheSame) {
   }
 }
 
+// A deck plate 15 cm thick: where its rims are narrower than min_thin_px (0.4) at its nearest
+// point, they are left out as a ribbon that narrow would be, and the plate is its top; where they
+// are wider, the two rims facing the eye are drawn too.
+TEST_F(ParametricRendering, PlateRimsNarrowerThanTheSmallestThinFormAreLeftOut) {
+  const fs::path package = buildPackage(
+      "far_plate", {Part{1, Box{glm::vec3(4.0f, 3.5f, 0.075f)}, placed({0.0, 0.0, 0.0})}}, false);
+  const glm::dvec3 direction = glm::normalize(glm::dvec3(0.3, -1.0, 0.6));
+  const double radius = std::sqrt(4.0 * 4.0 + 3.5 * 3.5 + 0.075 * 0.075);
+  // The eye where the rims are rim_px wide at the plate's nearest point.
+  auto eyeAt = [&](double rim_px) {
+    const double pixel_scale = lookingAt(direction, {0.0, 0.0, 0.0}).pixelScale(kHeight);
+    return lookingAt(direction * (radius + 0.15 * pixel_scale / rim_px), {0.0, 0.0, 0.0});
+  };
+  const Camera far_eye = eyeAt(0.3), near_eye = eyeAt(0.5);
+  const Frame far = render(package, far_eye, ParametricMode::Tessellated);
+  const Frame near = render(package, near_eye, ParametricMode::Tessellated);
+  EXPECT_EQ(far.stats.parametric_instances_drawn, 1u);
+  EXPECT_EQ(far.stats.parametric_triangles, 2u);   // the top
+  EXPECT_EQ(near.stats.parametric_triangles, 6u);  // the top, the -Y rim and the +X rim
+  // The plate shows where it is, from afar too.
+  EXPECT_EQ(idAt(far, pixelOf(far_eye, {0.0, 0.0, 0.075})), 1u);
+  EXPECT_EQ(idAt(near, pixelOf(near_eye, {0.0, 0.0, 0.075})), 1u);
+}
+
 // Two equal cylinders in one parametric cluster, one near the eye and one far: the far one is
 // drawn with fewer segments, so the pair costs far less than twice the near one alone (a
 // per-cluster resolution would draw both at the near one's).
