@@ -76,16 +76,19 @@ OwnedUnitMesh makeUnitMesh(Shape shape, uint32_t a, uint32_t b) {
 void InstanceBatch::clear() {
   vertices.clear();
   beam_vertices.clear();
+  row_vertices.clear();
   for (auto& list : indices) list.clear();
 }
 
 void InstanceBatch::append(const InstanceBatch& other) {
   const auto base = static_cast<uint32_t>(vertices.size());
   const auto beam_base = static_cast<uint32_t>(beam_vertices.size());
+  const auto row_base = static_cast<uint32_t>(row_vertices.size());
   vertices.insert(vertices.end(), other.vertices.begin(), other.vertices.end());
   beam_vertices.insert(beam_vertices.end(), other.beam_vertices.begin(), other.beam_vertices.end());
+  row_vertices.insert(row_vertices.end(), other.row_vertices.begin(), other.row_vertices.end());
   for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
-    const uint32_t offset = batch == kBeams ? beam_base : base;
+    const uint32_t offset = batch == kBeams ? beam_base : batch == kRows ? row_base : base;
     for (uint32_t index : other.indices[batch]) indices[batch].push_back(offset + index);
   }
 }
@@ -155,6 +158,38 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
     const glm::vec3& b1 = vertices[base + unit_indices[k + 1]].position;
     const glm::vec3& c1 = vertices[base + unit_indices[k + 2]].position;
     if (front * glm::dot(glm::cross(b1 - a, c1 - a), a) > 0.0f) continue;  // eye behind it
+    out.insert(out.end(),
+               {base + unit_indices[k], base + unit_indices[k + 1], base + unit_indices[k + 2]});
+  }
+}
+
+void appendBoxRow(InstanceBatch& batch, const pkg::InstanceRecord& row, const InstanceBounds& b,
+                  const glm::vec3& anchor_eye, const Form& f, const OwnedUnitMesh& unit,
+                  uint32_t members, int axis) {
+  std::vector<RowVertex>& vertices = batch.row_vertices;
+  const UnitMesh& mesh = unit.mesh;
+  const glm::mat3 linear(row.linear[0], row.linear[1], row.linear[2], row.linear[3], row.linear[4],
+                         row.linear[5], row.linear[6], row.linear[7], row.linear[8]);
+  const glm::vec3 origin = anchor_eye + b.origin;
+  const glm::vec3 half(row.params[0], row.params[1], row.params[2]);
+  const float count = float(members);
+  const uint32_t base = static_cast<uint32_t>(vertices.size());
+  for (uint32_t v = 0; v < mesh.vertex_count; ++v) {
+    const glm::vec3 q(unit.shapes[mesh.base_vertex + v]);
+    vertices.push_back({origin + linear * (q * half), row.object, 0.5f * (q[axis] + 1.0f) * count,
+                        members - 1});
+  }
+  const uint32_t left_out = b.covered_faces | f.thin_faces;
+  const bool cull = f.batch == kCullCcw || f.batch == kCullCw;
+  const float front = f.batch == kCullCw ? -1.0f : 1.0f;
+  std::vector<uint32_t>& out = batch.indices[kRows];
+  const uint32_t* unit_indices = unit.indices.data() + mesh.first_index;
+  for (uint32_t k = 0; k + 2 < mesh.side_indices; k += 3) {
+    if ((left_out >> (k / 6)) & 1u) continue;  // two triangles a face, in the bits' order
+    const glm::vec3& a = vertices[base + unit_indices[k]].position;
+    const glm::vec3& b1 = vertices[base + unit_indices[k + 1]].position;
+    const glm::vec3& c1 = vertices[base + unit_indices[k + 2]].position;
+    if (cull && front * glm::dot(glm::cross(b1 - a, c1 - a), a) > 0.0f) continue;  // eye behind it
     out.insert(out.end(),
                {base + unit_indices[k], base + unit_indices[k + 1], base + unit_indices[k + 2]});
   }

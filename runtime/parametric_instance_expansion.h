@@ -39,6 +39,15 @@ struct BeamVertex {
   float across;        // signed metres from the edge where the faces meet (< 0: first face)
 };
 
+// One vertex of a row of boxes (appendBoxRow): 24 bytes. A fragment's object is `object` plus
+// the whole part of `along`, at most `last`.
+struct RowVertex {
+  glm::vec3 position;  // metres from the eye
+  uint32_t object;     // the first member's object index
+  float along;         // members from the row's start face: 0 there, the member count at its end
+  uint32_t last;       // the member count less one
+};
+
 // A unit mesh with arrays of its own (base_vertex and first_index 0), so that threads expanding
 // instances read it while another thread makes a mesh they have not met yet.
 struct OwnedUnitMesh {
@@ -52,10 +61,11 @@ struct OwnedUnitMesh {
 OwnedUnitMesh makeUnitMesh(Shape shape, uint32_t a, uint32_t b);
 
 // Expanded instances: vertices relative to the eye, and indices into them by Batch (kBeams into
-// beam_vertices, the others into vertices).
+// beam_vertices, kRows into row_vertices, the others into vertices).
 struct InstanceBatch {
   std::vector<SmoothVertex> vertices;
   std::vector<BeamVertex> beam_vertices;
+  std::vector<RowVertex> row_vertices;
   std::array<std::vector<uint32_t>, kBatchCount> indices;
 
   void clear();
@@ -79,6 +89,14 @@ struct LatheScratch {
 void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
                    std::span<const glm::vec2> profile_points, const InstanceBounds& b,
                    const glm::vec3& anchor_eye, const Form& f, const OwnedUnitMesh& unit);
+
+// Appends row `row` (box_rows.h: the row as one box record, its bounds `b`) of `members` boxes
+// along canonical axis `axis` as the surface of form `f` (a box), into kRows whatever f's batch:
+// back faces, covered faces and thin rims are left out here as appendSurface leaves them out,
+// and each fragment tells the member it falls on.
+void appendBoxRow(InstanceBatch& batch, const pkg::InstanceRecord& row, const InstanceBounds& b,
+                  const glm::vec3& anchor_eye, const Form& f, const OwnedUnitMesh& unit,
+                  uint32_t members, int axis);
 
 // Appends revolution `in` swept over `segments` steps (a full turn's count; a partial sweep gets
 // its share, at least one), its profile simplified to `profile_tolerance` metres: flat bands

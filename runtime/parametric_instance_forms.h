@@ -46,9 +46,10 @@ enum class Shape : uint32_t { Tube, Sphere, Torus, Box, Ribbon, Point, Profile, 
 // The surface an instance of primitive `type` is drawn with, when it is not thin.
 Shape surfaceOf(uint32_t type);
 
-// The per-frame batches: triangles by back-face culling, points, and the thin beams' bands
-// (vertices of their own: both faces' normals).
-enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kPoints, kBeams, kBatchCount };
+// The per-frame batches: triangles by back-face culling, points, rows of boxes (vertices of
+// their own: where along the row), and the thin beams' bands (vertices of their own: both
+// faces' normals).
+enum Batch : uint32_t { kTwoSided, kCullCcw, kCullCw, kPoints, kRows, kBeams, kBatchCount };
 
 constexpr uint8_t kValid = 1, kCapped = 2, kMirrored = 4;
 constexpr uint8_t kRectangleProfile = 8;  // an extrusion whose profile fills its box: a box
@@ -79,7 +80,12 @@ struct InstanceBounds {
   // A box's faces that another box's face covers (covered_box_faces.h): bit f for face f of
   // -X, +X, -Y, +Y, -Z, +Z, the unit box's order. Left out of its surface.
   uint8_t covered_faces = 0;
+  // Rows of boxes (box_rows.h): 0 for an instance on its own; kDrawnWithRow for a member drawn by
+  // its row's first member; n >= 2 for the first member of a row of n, whose bounds these are
+  // (the row's: one box n times as long).
+  uint8_t row = 0;
 };
+constexpr uint8_t kDrawnWithRow = 1;
 
 // An open tube's inside can only be seen through its end discs, so from an eye between the two
 // end planes and outside the tube its back faces are hidden by its front faces. `eye` is

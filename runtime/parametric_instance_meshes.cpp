@@ -23,6 +23,7 @@
 #include <tbb/task_arena.h>
 #include <tbb/task_group.h>
 
+#include "box_rows.h"
 #include "camera.h"
 #include "gl_program.h"
 #include "parametric_instance_expansion.h"
@@ -74,7 +75,29 @@ struct ExpandedPart {
 
 struct ParametricInstanceMeshes::Impl {
   const PackageView* view = nullptr;
-  std::vector<InstanceBounds> bounds;  // by instance index
+  std::vector<InstanceBounds> bounds;  // by instance index; a row's first member: the row's
+  // Rows of boxes, by first member, and that member's own bounds (drawn on its own when the row
+  // is thin or nothing as a whole).
+  std::vector<BoxRow> rows;
+  std::vector<InstanceBounds> row_first_bounds;
+  // The other members, each with its row's cluster, by instance: a member is left to its row
+  // when the row's cluster is among the frame's, and draws itself otherwise.
+  std::vector<std::pair<uint32_t, uint32_t>> row_member_clusters;
+  std::vector<uint8_t> cluster_in_frame;      // by cluster: this frame's passes so far
+  std::vector<uint32_t> clusters_in_frame;    // the clusters set there, to clear
+  bool leftToItsRow(uint32_t i) const {
+    const auto at = std::lower_bound(row_member_clusters.begin(), row_member_clusters.end(),
+                                     std::pair<uint32_t, uint32_t>(i, 0));
+    return at != row_member_clusters.end() && at->first == i && cluster_in_frame[at->second];
+  }
+  // The row whose first member is instance `i`.
+  size_t rowOf(uint32_t i) const {
+    return size_t(std::lower_bound(rows.begin(), rows.end(), i,
+                                   [](const BoxRow& row, uint32_t at) {
+                                     return row.instances.front() < at;
+                                   }) -
+                  rows.begin());
+  }
   // The scales at which each instance shows: built with the bounds for InstanceLodView's
   // default thresholds, and again by prepare() for a frame whose thresholds differ.
   bool use_scale_index = true;
@@ -113,10 +136,11 @@ struct ParametricInstanceMeshes::Impl {
   }
   GLuint program = 0, vertex_array = 0, beam_program = 0, beam_vertex_array = 0;
   GLuint point_program = 0;  // the points' batch: shaded per vertex
+  GLuint row_program = 0, row_vertex_array = 0;  // rows of boxes: the member per fragment
   // The GL buffers of each part drawn in a frame (set 0 for a batch drawn whole): a part's are
   // filled while llvmpipe may still read the previous part's.
   struct BufferSet {
-    GLuint vertices = 0, beam_vertices = 0, indices = 0;
+    GLuint vertices = 0, beam_vertices = 0, row_vertices = 0, indices = 0;
   };
   std::vector<BufferSet> buffer_sets;
   BufferSet& bufferSet(size_t k) {
@@ -124,6 +148,7 @@ struct ParametricInstanceMeshes::Impl {
       BufferSet set;
       glCreateBuffers(1, &set.vertices);
       glCreateBuffers(1, &set.beam_vertices);
+      glCreateBuffers(1, &set.row_vertices);
       glCreateBuffers(1, &set.indices);
       buffer_sets.push_back(set);
     }
@@ -197,13 +222,16 @@ struct ParametricInstanceMeshes::Impl {
     glDeleteProgram(program);
     glDeleteProgram(beam_program);
     glDeleteProgram(point_program);
+    glDeleteProgram(row_program);
     for (const BufferSet& set : buffer_sets) {
       glDeleteBuffers(1, &set.vertices);
       glDeleteBuffers(1, &set.beam_vertices);
+      glDeleteBuffers(1, &set.row_vertices);
       glDeleteBuffers(1, &set.indices);
     }
     glDeleteVertexArrays(1, &vertex_array);
     glDeleteVertexArrays(1, &beam_vertex_array);
+    glDeleteVertexArrays(1, &row_vertex_array);
   }
 
   // The distance of instance `b` (its centre at `centre`, eye-relative) for its level of detail.
@@ -214,15 +242,67 @@ struct ParametricInstanceMeshes::Impl {
   // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye) into
   // `part`. Called from several threads at once, each with its own part.
   void place(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+    if (bounds[i].row >= 2) {
+      placeRow(part, c, anchor_eye, i);
+      return;
+    }
+    placeOne(part, c, anchor_eye, i, bounds[i], view->instances()[i], true);
+  }
+
+  // The form of an instance with bounds `b` at its distance (set, with the metres a pixel spans
+  // there).
+  Form formOf(const InstanceBounds& b, const glm::vec3& anchor_eye, double& distance,
+              float& metres_per_px) const {
+    distance = distanceOf(b, anchor_eye + b.centre);
+    const double px_per_m = choice.pixel_scale / distance;
+    metres_per_px = static_cast<float>(1.0 / px_per_m);
+    return chooseForm(b, static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px,
+                      static_cast<float>(choice.view.thin_px) * metres_per_px,
+                      static_cast<float>(choice.view.min_thin_px) * metres_per_px);
+  }
+
+  // A row of boxes whose first member is `i` (bounds[i] are the row's): one box when the row is
+  // a box at its distance, each member on its own otherwise (thin or left out as a whole, the
+  // members are at most what it is). Recorded drawn as the row: the pyramid's tests take its box.
+  void placeRow(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
-    const double distance = distanceOf(b, anchor_eye + b.centre);
-    const double px_per_m = choice.pixel_scale / distance;
-    const float metres_per_px = static_cast<float>(1.0 / px_per_m);
-    Form form =
-        chooseForm(b, static_cast<float>(std::max(choice.view.tolerance_px, 1e-3)) * metres_per_px,
-                   static_cast<float>(choice.view.thin_px) * metres_per_px,
-                   static_cast<float>(choice.view.min_thin_px) * metres_per_px);
+    const size_t r = rowOf(i);
+    const BoxRow& row = rows[r];
+    double distance = 0.0;
+    float metres_per_px = 0.0f;
+    Form form = formOf(b, anchor_eye, distance, metres_per_px);
+    if (form.shape == Shape::None) {
+      stats.instances_culled += row.instances.size();
+      return;
+    }
+    if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
+    if (form.shape == Shape::Box) {
+      cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach), false);
+      stats.instances_drawn += row.instances.size();
+      appendBoxRow(part.batch, row.record, b, anchor_eye, form, unitMesh(form.shape, form.a, form.b),
+                   uint32_t(row.instances.size()), row.axis);
+      return;
+    }
+    // Each member's bounds are relative to its own cluster's anchor.
+    const auto instances = view->instances();
+    const auto records = view->clusters();
+    for (size_t k = 0; k < row.instances.size(); ++k) {
+      const uint32_t m = row.instances[k], cluster = row.member_clusters[k];
+      const glm::vec3 member_anchor_eye =
+          cluster == c ? anchor_eye : glm::vec3(clusterAnchor(records[cluster]) - choice.view.eye);
+      placeOne(part, c, member_anchor_eye, m, k == 0 ? row_first_bounds[r] : bounds[m],
+               instances[m], false);
+    }
+  }
+
+  // Instance `i` of cluster `c`, bounds `b`, record `in`; listed drawn when `record_drawn`.
+  void placeOne(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i,
+                const InstanceBounds& b, const pkg::InstanceRecord& in, bool record_drawn) {
+    InstanceLodStats& stats = part.stats;
+    double distance = 0.0;
+    float metres_per_px = 0.0f;
+    Form form = formOf(b, anchor_eye, distance, metres_per_px);
     if (form.shape == Shape::None) {
       ++stats.instances_culled;
       return;
@@ -231,7 +311,7 @@ struct ParametricInstanceMeshes::Impl {
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach),
                     ((b.flags & kRunMember) && eye_clear_of_runs) ||
                         (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, choice.near_reach)));
-    if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
+    if (record_drawn && choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
       FaceCull cull = FaceCull::None;
@@ -241,7 +321,6 @@ struct ParametricInstanceMeshes::Impl {
       return;
     }
     stats.thin_instances += form.shape == Shape::Ribbon || form.shape == Shape::Point;
-    const pkg::InstanceRecord& in = view->instances()[i];
     if (form.shape == Shape::Ribbon) {
       if (form.box_frame)
         appendBeamRibbon(part.batch, in, b, anchor_eye, form.long_axis);
@@ -269,7 +348,7 @@ struct ParametricInstanceMeshes::Impl {
   void consider(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
-    if (!(b.flags & kValid)) return;
+    if (!(b.flags & kValid) || (b.row == kDrawnWithRow && leftToItsRow(i))) return;
     ++stats.instances_tested;
     const glm::vec3 centre = anchor_eye + b.centre;
     const double px_per_m = choice.pixel_scale / distanceOf(b, centre);
@@ -340,7 +419,7 @@ struct ParametricInstanceMeshes::Impl {
   // the many tiles its large triangles cover, and on the walked decks parts were 5 % slower.
   void drawPart(InstanceBatch& part, size_t set_index, uint64_t part_instances, size_t& unflushed,
                 InstanceLodStats& stats) {
-    if (part.vertices.empty() && part.beam_vertices.empty()) return;
+    if (part.vertices.empty() && part.beam_vertices.empty() && part.row_vertices.empty()) return;
     all_indices.clear();
     std::array<size_t, kBatchCount + 1> first{};
     for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
@@ -356,18 +435,26 @@ struct ParametricInstanceMeshes::Impl {
                       part.vertices.data(), GL_STREAM_DRAW);
     glNamedBufferData(set.beam_vertices, GLsizeiptr(part.beam_vertices.size() * sizeof(BeamVertex)),
                       part.beam_vertices.data(), GL_STREAM_DRAW);
+    glNamedBufferData(set.row_vertices, GLsizeiptr(part.row_vertices.size() * sizeof(RowVertex)),
+                      part.row_vertices.data(), GL_STREAM_DRAW);
     glNamedBufferData(set.indices, GLsizeiptr(all_indices.size() * sizeof(uint32_t)),
                       all_indices.data(), GL_STREAM_DRAW);
     glVertexArrayVertexBuffer(vertex_array, 0, set.vertices, 0, sizeof(SmoothVertex));
     glVertexArrayElementBuffer(vertex_array, set.indices);
     glVertexArrayVertexBuffer(beam_vertex_array, 0, set.beam_vertices, 0, sizeof(BeamVertex));
     glVertexArrayElementBuffer(beam_vertex_array, set.indices);
+    glVertexArrayVertexBuffer(row_vertex_array, 0, set.row_vertices, 0, sizeof(RowVertex));
+    glVertexArrayElementBuffer(row_vertex_array, set.indices);
     glUseProgram(program);
     glBindVertexArray(vertex_array);
     for (uint32_t batch = 0; batch < kBatchCount; ++batch) {
       const size_t count = first[batch + 1] - first[batch];
       if (count == 0) continue;
       if (batch == kPoints) glUseProgram(point_program);
+      if (batch == kRows) {  // vertices and a program of their own; back faces left out already
+        glUseProgram(row_program);
+        glBindVertexArray(row_vertex_array);
+      }
       if (batch == kBeams) {  // the last batch: vertices and a program of their own
         glUseProgram(beam_program);
         glBindVertexArray(beam_vertex_array);
@@ -475,6 +562,25 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
                           s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
                       }
                     });
+  // Rows of boxes: only where the preprocessor marked covered faces (the faces between members).
+  if (options.box_rows && (view.header().flags & pkg::kHeaderCoveredFacesMarked)) {
+    s.rows = findBoxRows(instances, clusters);
+    s.row_first_bounds.reserve(s.rows.size());
+    for (const BoxRow& row : s.rows) {
+      const uint32_t first = row.instances.front();
+      s.row_first_bounds.push_back(s.bounds[first]);
+      InstanceBounds whole = boundsOf(row.record, view.profilePoints(), clusterAnchor(clusters[row.cluster]));
+      if (!(whole.flags & kValid)) continue;  // drawn one by one
+      whole.row = static_cast<uint8_t>(row.instances.size());
+      s.bounds[first] = whole;
+      for (size_t k = 1; k < row.instances.size(); ++k) {
+        s.bounds[row.instances[k]].row = kDrawnWithRow;
+        s.row_member_clusters.push_back({row.instances[k], row.cluster});
+      }
+    }
+    std::sort(s.row_member_clusters.begin(), s.row_member_clusters.end());
+  }
+  s.cluster_in_frame.assign(clusters.size(), 0);
   if (s.use_scale_index) {
     const InstanceLodView defaults;
     s.scales.build(clusters, s.bounds,
@@ -499,6 +605,21 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   s.point_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricPointVertexShader()},
                                     {GL_FRAGMENT_SHADER, gl::parametricPointFragmentShader()}},
                                    "ParametricInstanceMeshes (points)");
+  s.row_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricRowVertexShader()},
+                                  {GL_FRAGMENT_SHADER, gl::parametricRowFragmentShader()}},
+                                 "ParametricInstanceMeshes (rows)");
+  glCreateVertexArrays(1, &s.row_vertex_array);
+  const GLuint rows = s.row_vertex_array;
+  glEnableVertexArrayAttrib(rows, 0);
+  glVertexArrayAttribFormat(rows, 0, 3, GL_FLOAT, GL_FALSE, offsetof(RowVertex, position));
+  glEnableVertexArrayAttrib(rows, 1);
+  glVertexArrayAttribIFormat(rows, 1, 1, GL_UNSIGNED_INT, offsetof(RowVertex, object));
+  glEnableVertexArrayAttrib(rows, 2);
+  glVertexArrayAttribFormat(rows, 2, 1, GL_FLOAT, GL_FALSE, offsetof(RowVertex, along));
+  glEnableVertexArrayAttrib(rows, 3);
+  glVertexArrayAttribIFormat(rows, 3, 1, GL_UNSIGNED_INT, offsetof(RowVertex, last));
+  for (GLuint attribute = 0; attribute < 4; ++attribute)
+    glVertexArrayAttribBinding(rows, attribute, 0);
   s.beam_program = buildGlProgram({{GL_VERTEX_SHADER, gl::parametricBeamVertexShader()},
                                    {GL_FRAGMENT_SHADER, gl::parametricBeamFragmentShader()}},
                                   "ParametricInstanceMeshes (beams)");
@@ -592,6 +713,17 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     }
   }
   s.frame_clusters.assign(clusters.begin(), clusters.end());
+  // The clusters of the frame's passes so far: a row whose cluster is among them draws its
+  // members (Impl::leftToItsRow).
+  if (view.pass != InstancePass::Second) {
+    for (uint32_t c : s.clusters_in_frame) s.cluster_in_frame[c] = 0;
+    s.clusters_in_frame.clear();
+  }
+  for (uint32_t c : clusters)
+    if (c < s.cluster_in_frame.size() && !s.cluster_in_frame[c]) {
+      s.cluster_in_frame[c] = 1;
+      s.clusters_in_frame.push_back(c);
+    }
   // The clusters in runs, one part each; a run's part is its instances in cluster order.
   const size_t concurrency = size_t(tbb::this_task_arena::max_concurrency());
   if (view.pass != InstancePass::Second && s.clusters_per_run != 0 &&
@@ -664,7 +796,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
 void ParametricInstanceMeshes::submit(const glm::mat4& view_projection, uint32_t object_color_count,
                                       InstanceLodStats& stats) {
   Impl& s = *impl_;
-  for (GLuint program : {s.program, s.beam_program, s.point_program}) {
+  for (GLuint program : {s.program, s.beam_program, s.point_program, s.row_program}) {
     glProgramUniformMatrix4fv(program, gl::kViewProjectionLocation, 1, GL_FALSE,
                               &view_projection[0][0]);
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, object_color_count);

@@ -42,6 +42,9 @@ struct ParametricMeshOptions {
   // Tessellated mode: visit only the instances of a cluster whose distance lets them show
   // (InstanceScaleIndex); false tests every instance, for comparison. The frame is the same.
   bool scale_index = true;
+  // Tessellated mode: rows of equal boxes end to end drawn as one box each (box_rows.h); false
+  // draws every box on its own, for comparison. The frame is the same.
+  bool box_rows = true;
 };
 
 // One vertex of a tessellated cluster: 20 bytes. The normal is the surface's own (the

@@ -428,6 +428,49 @@ void main() {
 )";
 }
 
+// Rows of boxes drawn as one box each (appendBoxRow): a fragment's object is the member it falls
+// on, and its colour that object's, so the row shades and reads back as its boxes drawn one by
+// one (flat faces: derivative normals, as parametricSmoothFragmentShader shades a box).
+inline std::string parametricRowVertexShader() {
+  return R"(#version 450 core
+layout(location = 0) in vec3 position;  // metres from the eye
+layout(location = 1) in uint object;    // the row's first member's
+layout(location = 2) in float along;    // members from the row's start face
+layout(location = 3) in uint last;      // the member count less one
+layout(location = 0) uniform mat4 view_projection;
+out vec3 pos_eye;
+out float v_along;
+flat out uint v_object;
+flat out uint v_last;
+void main() {
+  pos_eye = position;
+  v_along = along;
+  v_object = object;
+  v_last = last;
+  gl_Position = view_projection * vec4(pos_eye, 1.0);
+}
+)";
+}
+
+inline std::string parametricRowFragmentShader() {
+  return std::string(R"(#version 450 core
+in vec3 pos_eye;
+in float v_along;
+flat in uint v_object;
+flat in uint v_last;
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out uint out_id;
+)") + shadingGlsl() + R"(
+void main() {
+  uint object = v_object + min(uint(max(v_along, 0.0)), v_last);
+  vec3 facet = facetNormal(pos_eye);
+  if (dot(facet, pos_eye) > 0.0) facet = -facet;
+  out_color = shadeSeenSide(objectBaseColor(object), facet, pos_eye);
+  out_id = object + 1u;
+}
+)";
+}
+
 // Thin beams drawn per instance as their silhouette (appendBeamRibbon in
 // parametric_instance_expansion.h): one band of two triangles facing the eye, across the two long
 // faces the eye sees. Each vertex carries both faces' normals and `across`, negative on the first

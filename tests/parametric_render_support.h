@@ -40,7 +40,8 @@ struct Part {
 // Writes `parts` (each as a parametric primitive, or finely tessellated into a mesh when
 // `tessellated`) plus optional mesh objects into a .tws, preprocesses it, returns the package.
 inline fs::path buildPackage(const std::string& name, const std::vector<Part>& parts,
-                             bool tessellated, const std::vector<SceneObject>& meshes = {}) {
+                             bool tessellated, const std::vector<SceneObject>& meshes = {},
+                             uint32_t parametric_cluster_size = 64) {
   const fs::path dir = test::processScratchDir("parametric_renderer");
   const fs::path scene = dir / (name + ".tws");
   {
@@ -69,6 +70,7 @@ inline fs::path buildPackage(const std::string& name, const std::vector<Part>& p
   PreprocessOptions options;
   options.inputs = {scene};
   options.output = out;
+  options.parametric_cluster_size = parametric_cluster_size;
   runPreprocess(options);
   return out;
 }
@@ -88,13 +90,14 @@ inline Frame render(const fs::path& package, const Camera& camera, ParametricMod
                     OcclusionMode occlusion = OcclusionMode::Off, Walkthrough** keep = nullptr,
                     bool reference = false, double tau_px = 0.25, double fixed_tolerance_m = 0.0,
                     uint32_t clusters_per_run = 32, uint32_t primitives_per_flush = 8192,
-                    bool scale_index = true) {
+                    bool scale_index = true, bool box_rows = true) {
   WalkthroughOptions options;
   options.reference = reference;
   options.parametric_meshes.fixed_tolerance_m = fixed_tolerance_m;
   options.parametric_meshes.clusters_per_run = clusters_per_run;
   options.parametric_meshes.primitives_per_flush = primitives_per_flush;
   options.parametric_meshes.scale_index = scale_index;
+  options.parametric_meshes.box_rows = box_rows;
   options.width = kWidth;
   options.height = kHeight;
   options.occlusion = occlusion;

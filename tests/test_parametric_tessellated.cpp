@@ -342,6 +342,72 @@ TEST_F(ParametricRendering, CoveredBoxFacesAreLeftOutAndTheFrameStaysTheSame) {
   }
 }
 
+// Rows of boxes (box_rows.h): a deck of twelve plates in three rows of four, each plate its own
+// colour, in clusters of five so that rows run across clusters. Drawn as rows (one box each,
+// the plate per fragment) the frame is the one its plates drawn one by one give: from above,
+// from below, from afar and with the first plates out of view, with occlusion culling and without.
+TEST_F(ParametricRendering, RowsOfBoxesDrawTheFrameTheirBoxesDraw) {
+  std::vector<Part> parts;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x)
+      parts.push_back({uint32_t(1 + y * 4 + x), Box{glm::vec3(4.0f, 3.5f, 0.075f)},
+                       placed({4.0 + 8.0 * x, 3.5 + 7.0 * y, -0.075}),
+                       0xff000000u | (0x1f2b3du * uint32_t(1 + y * 4 + x))});
+  const fs::path package = buildPackage("deck_rows", parts, false, {}, 5);
+  for (const Camera& camera : {lookingAt({-8.0, -9.0, 9.0}, {16.0, 10.5, 0.0}),
+                               lookingAt({40.0, 30.0, -7.0}, {16.0, 10.5, 0.0}),
+                               lookingAt({-100.0, -80.0, 60.0}, {16.0, 10.5, 0.0}),
+                               lookingAt({22.0, 10.5, 5.0}, {40.0, 10.5, 0.0})})
+  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
+    const Frame rows = render(package, camera, ParametricMode::Tessellated, occlusion, nullptr,
+                              false, 0.25, 0.0, 32, 8192, true, true);
+    const Frame boxes = render(package, camera, ParametricMode::Tessellated, occlusion, nullptr,
+                               false, 0.25, 0.0, 32, 8192, true, false);
+    // A row drawn counts all its members, in view or not.
+    EXPECT_GE(rows.stats.parametric_instances_drawn, boxes.stats.parametric_instances_drawn);
+    EXPECT_LT(rows.stats.parametric_triangles, boxes.stats.parametric_triangles);
+    // Pixels may differ only where two plates meet (a pixel centre on their shared edge goes to
+    // one triangle or the other): each such pixel shows a plate that the other frame shows
+    // within a pixel of it.
+    uint64_t shown = 0, differ = 0;
+    for (int y = 0; y < kHeight; ++y)
+      for (int x = 0; x < kWidth; ++x) {
+        const size_t p = size_t(y) * kWidth + size_t(x);
+        shown += boxes.ids[p] != 0u;
+        if (rows.ids[p] == boxes.ids[p] &&
+            std::equal(&rows.rgba[4 * p], &rows.rgba[4 * p] + 4, &boxes.rgba[4 * p]))
+          continue;
+        ++differ;
+        bool near = false;
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            if (nx >= 0 && ny >= 0 && nx < kWidth && ny < kHeight)
+              near = near || boxes.ids[size_t(ny) * kWidth + size_t(nx)] == rows.ids[p];
+          }
+        EXPECT_TRUE(near) << "pixel " << x << ", " << y;
+      }
+    EXPECT_GT(shown, 200u);
+    EXPECT_LE(differ * 500, shown) << differ << " of " << shown << " pixels shown differ";
+  }
+  // So far away that a row is under a pixel across (a ribbon): its plates are drawn one by one,
+  // each from its own cluster's anchor, as points.
+  Camera far_away = lookingAt({-1000.0, -900.0, 600.0}, {16.0, 10.5, 0.0});
+  far_away.far_m = 5000.0;
+  const Frame rows = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
+                            nullptr, false, 0.25, 0.0, 32, 8192, true, true);
+  const Frame boxes = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
+                             nullptr, false, 0.25, 0.0, 32, 8192, true, false);
+  EXPECT_EQ(rows.stats.parametric_instances_drawn, 12u);
+  EXPECT_EQ(rows.stats.parametric_thin_instances, 12u);
+  EXPECT_EQ(boxes.stats.parametric_thin_instances, 12u);
+  uint64_t shown = 0;
+  for (uint32_t id : boxes.ids) shown += id != 0u;
+  EXPECT_GT(shown, 3u);
+  EXPECT_EQ(rows.ids, boxes.ids);
+  EXPECT_EQ(rows.rgba, boxes.rgba);
+}
+
 // A deck plate 15 cm thick: where its rims are narrower than min_thin_px (0.4) at its nearest
 // point, they are left out as a ribbon that narrow would be, and the plate is its top; where they
 // are wider, the two rims facing the eye are drawn too.
