@@ -207,13 +207,13 @@ Form chooseForm(const InstanceBounds& b, float tolerance, float thin, float min_
         f.shape = Shape::Box;
         f.box_frame = true;
       }
-      // A revolution: half the tolerance for the angle, half for the profile (appendLathe).
       // A plate's rims are as wide as the plate is thick: under min_thin they go as a ribbon that
       // narrow would, and the plate is its two large faces.
       if (f.shape == Shape::Box && thin_axes == 1 && 2.0f * b.size[thinnest] < min_thin) {
-        const uint32_t all = 0x3f, along = 3u << (2 * thinnest);
-        f.thin_faces = static_cast<uint8_t>(all & ~along);
+        const uint32_t all = 0x3f, large = 3u << (2 * thinnest);
+        f.thin_faces = static_cast<uint8_t>(all & ~large);
       }
+      // A revolution: half the tolerance for the angle, half for the profile (appendLathe).
       if (f.shape == Shape::Profile && b.type == static_cast<uint8_t>(pkg::PrimitiveType::Revolution)) {
         f.shape = Shape::Lathe;
         f.a = levelIndex(arcSegments(std::max(b.size[0], b.size[1]), float(kTwoPi), 0.5f * tolerance));

@@ -115,9 +115,9 @@ struct Form {
   bool box_frame = false;  // shape points span the canonical box (not the primitive's formula)
   Batch batch = kTwoSided;
   uint8_t long_axis = 0;   // a box-framed ribbon: the canonical box axis it runs along
-  // A box thin along one axis (a plate) thinner there than the smallest thin form worth drawing:
-  // its faces along that axis (the rims), in the bits' order of InstanceBounds::covered_faces,
-  // which are left out as a thin form that narrow would be.
+  // A box thin along one axis (a plate), thinner there than the smallest thin form worth
+  // drawing: its four rims, as narrow as it is thick, in the bits' order of
+  // InstanceBounds::covered_faces, left out as a thin form that narrow would be.
   uint8_t thin_faces = 0;
 };
 

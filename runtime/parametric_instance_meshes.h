@@ -16,10 +16,10 @@
 // How: a unit mesh per (shape, resolution) is made once, on first use (the rows and columns
 // formats/tessellate.h builds, so at equal segment counts the triangles are the same); each frame,
 // every visible instance is expanded from its unit mesh on the CPU into one eye-relative vertex
-// batch (the thin beams' bands into one of their own), drawn with at most five calls (a far
-// view's in flushed parts). Instancing was measured first: llvmpipe runs its vertex pipeline
-// once per instance, about a microsecond each, which for 60,000 small far instances cost more
-// than their triangles (docs/parametrics.md).
+// batch (the thin beams' bands and the rows of boxes, box_rows.h, into ones of their own), drawn
+// with at most six calls (a far view's in flushed parts). Instancing was measured first:
+// llvmpipe runs its vertex pipeline once per instance, about a microsecond each, which for
+// 60,000 small far instances cost more than their triangles (docs/parametrics.md).
 // Extrusions that need their true surface are handed back to the caller for
 // ParametricMeshes::drawInstances.
 // Occlusion (hzb mode): instances are culled one by one, two-pass like the clusters. The first
