@@ -9,18 +9,44 @@
 namespace tw {
 namespace {
 
-bool sameShape(const pkg::InstanceRecord& a, const pkg::InstanceRecord& b) {
-  constexpr uint32_t kOwnFlags = ~pkg::kInstanceCoveredFaces;
-  return a.type == b.type && std::equal(a.linear, a.linear + 9, b.linear) &&
-         std::equal(a.params, a.params + 3, b.params) && (a.flags & kOwnFlags) == (b.flags & kOwnFlags);
+// Whether an instance's profile lies within the profile table (the view checks packages, and a
+// row never reads past the table whatever it is given).
+bool profileInRange(const pkg::InstanceRecord& in, size_t points) {
+  return in.profile_first <= points && in.profile_count <= points - in.profile_first;
 }
 
-// Whether `next`'s centre lies one box length from `at`'s along canonical axis `axis`, the face
-// between them covered on both sides.
+bool isBox(const pkg::InstanceRecord& in) { return in.type == uint32_t(pkg::PrimitiveType::Box); }
+
+// Equal members: the same type, transform columns, parameters and flags (but for a box's covered
+// faces), and for extrusions the same profile point for point.
+bool sameShape(const pkg::InstanceRecord& a, const pkg::InstanceRecord& b,
+               std::span<const glm::vec2> profile_points) {
+  constexpr uint32_t kOwnFlags = ~pkg::kInstanceCoveredFaces;
+  if (a.type != b.type || !std::equal(a.linear, a.linear + 9, b.linear) ||
+      !std::equal(a.params, a.params + 6, b.params) || (a.flags & kOwnFlags) != (b.flags & kOwnFlags) ||
+      a.profile_count != b.profile_count)
+    return false;
+  if (a.profile_first == b.profile_first || a.profile_count == 0) return true;
+  const auto points = [&](const pkg::InstanceRecord& in) {
+    return profile_points.subspan(in.profile_first, in.profile_count);
+  };
+  const auto pa = points(a), pb = points(b);
+  return std::equal(pa.begin(), pa.end(), pb.begin());
+}
+
+// Whether `next` lies one member length from `at` along canonical axis `axis`: a box's centre,
+// the face between them covered on both sides; an extrusion's start (along its own axis, 2, by
+// its height).
 bool follows(const pkg::InstanceRecord& at, const pkg::InstanceRecord& next, int axis) {
-  const uint8_t at_faces = coveredFaces(at.flags), next_faces = coveredFaces(next.flags);
-  if (!((at_faces >> (2 * axis + 1)) & 1u) || !((next_faces >> (2 * axis)) & 1u)) return false;
-  const double step = 2.0 * double(at.params[axis]);
+  double step = 0.0;
+  if (isBox(at)) {
+    const uint8_t at_faces = coveredFaces(at.flags), next_faces = coveredFaces(next.flags);
+    if (!((at_faces >> (2 * axis + 1)) & 1u) || !((next_faces >> (2 * axis)) & 1u)) return false;
+    step = 2.0 * double(at.params[axis]);
+  } else {
+    if (axis != 2) return false;
+    step = double(at.params[0]);
+  }
   for (int k = 0; k < 3; ++k) {
     const double expected = double(at.origin[k]) + double(at.linear[3 * axis + k]) * step;
     if (std::abs(double(next.origin[k]) - expected) > kFaceToleranceM) return false;
@@ -28,9 +54,11 @@ bool follows(const pkg::InstanceRecord& at, const pkg::InstanceRecord& next, int
   return true;
 }
 
-// The rows among `boxes` (Box instances with a covered face), each in cluster `cluster_of`.
-void rowsOf(std::span<const pkg::InstanceRecord> instances, std::vector<uint32_t>& boxes,
-            std::span<const uint32_t> cluster_of, std::vector<BoxRow>& out) {
+// The rows among `boxes` (Box instances with a covered face, and extrusions), each in cluster
+// `cluster_of`.
+void rowsOf(std::span<const pkg::InstanceRecord> instances, std::span<const glm::vec2> profile_points,
+            std::vector<uint32_t>& boxes, std::span<const uint32_t> cluster_of,
+            std::vector<BoxRow>& out) {
   std::sort(boxes.begin(), boxes.end(), [&](uint32_t a, uint32_t b) {
     return instances[a].object != instances[b].object ? instances[a].object < instances[b].object : a < b;
   });
@@ -41,7 +69,7 @@ void rowsOf(std::span<const pkg::InstanceRecord> instances, std::vector<uint32_t
   for (size_t k = 0; k + 1 < boxes.size(); ++k) {
     const pkg::InstanceRecord& at = instances[boxes[k]];
     const pkg::InstanceRecord& after = instances[boxes[k + 1]];
-    if (after.object != at.object + 1 || !sameShape(at, after)) continue;
+    if (after.object != at.object + 1 || !sameShape(at, after, profile_points)) continue;
     for (int axis = 0; axis < 3; ++axis)
       if (follows(at, after, axis)) {
         next[k] = uint32_t(k + 1);
@@ -55,24 +83,29 @@ void rowsOf(std::span<const pkg::InstanceRecord> instances, std::vector<uint32_t
   for (size_t k = 0; k < boxes.size(); ++k)
     if (next[k] != kNone) has_previous[next[k]] = 1;
   auto emit = [&](BoxRow& row) {
+    row.cluster = cluster_of[row.instances.front()];
+    row.member_clusters.clear();
+    for (uint32_t i : row.instances) row.member_clusters.push_back(cluster_of[i]);
+    const pkg::InstanceRecord& head = instances[row.instances.front()];
+    const float n = float(row.instances.size());
+    pkg::InstanceRecord& r = row.record;
+    r = head;
+    if (!isBox(head)) {  // an extrusion from the head's start, n heights long
+      r.params[0] = head.params[0] * n;
+      out.push_back(row);
+      return;
+    }
     uint8_t sides = 0x3f;
     for (uint32_t i : row.instances) sides &= coveredFaces(instances[i].flags);
-    const pkg::InstanceRecord& head = instances[row.instances.front()];
     const pkg::InstanceRecord& tail = instances[row.instances.back()];
     const int a = row.axis;
     const uint8_t ends = uint8_t(1u << (2 * a)) | uint8_t(1u << (2 * a + 1));
     const uint8_t covered = uint8_t((sides & ~ends) | (coveredFaces(head.flags) & (1u << (2 * a))) |
                                     (coveredFaces(tail.flags) & (1u << (2 * a + 1))));
-    pkg::InstanceRecord& r = row.record;
-    r = head;
-    const float n = float(row.instances.size());
     for (int k = 0; k < 3; ++k)  // the centre of the row: halfway from the head's to the tail's
       r.origin[k] = 0.5f * (head.origin[k] + tail.origin[k]);
     r.params[a] = head.params[a] * n;
     r.flags = (head.flags & ~pkg::kInstanceCoveredFaces) | coveredFaceInstanceFlags(covered);
-    row.cluster = cluster_of[row.instances.front()];
-    row.member_clusters.clear();
-    for (uint32_t i : row.instances) row.member_clusters.push_back(cluster_of[i]);
     out.push_back(row);
   };
   for (size_t k = 0; k < boxes.size(); ++k) {
@@ -93,7 +126,8 @@ void rowsOf(std::span<const pkg::InstanceRecord> instances, std::vector<uint32_t
 }  // namespace
 
 std::vector<BoxRow> findBoxRows(std::span<const pkg::InstanceRecord> instances,
-                                std::span<const pkg::ClusterRecord> clusters) {
+                                std::span<const pkg::ClusterRecord> clusters,
+                                std::span<const glm::vec2> profile_points) {
   constexpr uint32_t kNoCluster = ~0u;
   std::vector<uint32_t> cluster_of(instances.size(), kNoCluster);
   for (uint32_t c = 0; c < clusters.size(); ++c) {
@@ -105,11 +139,13 @@ std::vector<BoxRow> findBoxRows(std::span<const pkg::InstanceRecord> instances,
   }
   std::vector<uint32_t> boxes;
   for (uint32_t i = 0; i < instances.size(); ++i)
-    if (cluster_of[i] != kNoCluster && instances[i].type == uint32_t(pkg::PrimitiveType::Box) &&
-        coveredFaces(instances[i].flags))
+    if (cluster_of[i] != kNoCluster &&
+        ((isBox(instances[i]) && coveredFaces(instances[i].flags)) ||
+         (instances[i].type == uint32_t(pkg::PrimitiveType::Extrusion) &&
+          profileInRange(instances[i], profile_points.size()))))
       boxes.push_back(i);
   std::vector<BoxRow> rows;
-  rowsOf(instances, boxes, cluster_of, rows);
+  rowsOf(instances, profile_points, boxes, cluster_of, rows);
   std::sort(rows.begin(), rows.end(), [](const BoxRow& a, const BoxRow& b) {
     return a.instances.front() < b.instances.front();
   });

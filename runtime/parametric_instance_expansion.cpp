@@ -309,7 +309,7 @@ void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
 // box's six to twelve would, but for its end faces; two bands of two, one a face, made the 50M
 // plant's orbit 20 % slower (docs/benchmarks.md, "Thin beams in one band").
 void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
-                      const glm::vec3& anchor_eye, int axis) {
+                      const glm::vec3& anchor_eye, int axis, uint32_t members) {
   const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
                          in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
   // The canonical box's half sizes mapped: b.size holds them in metres (half times the column's
@@ -346,7 +346,8 @@ void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
   // One cross-section: across `side`, the face at +u spans the edges u - w and u + w, the face
   // at +w the edges u + w and w - u; the outer edges are the silhouette, and `across` is zero
   // at the shared edge u + w.
-  auto section = [&](const glm::vec3& at) {
+  const uint32_t last = std::max(members, 1u) - 1;
+  auto section = [&](const glm::vec3& at, float members_before) {
     const glm::vec3 to_eye = -at / std::max(glm::length(at), 1e-30f);
     glm::vec3 side = glm::cross(tangent, to_eye);
     if (glm::length(side) < 1e-6f)  // seen along its axis: any side will do
@@ -354,12 +355,14 @@ void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
     side = glm::normalize(side);
     const float shared = glm::dot(u + w, side);
     const float u_outer = glm::dot(u - w, side), w_outer = glm::dot(w - u, side);
-    vertices.push_back({at + u_outer * side, in.object, packed_u, packed_w, -std::abs(shared - u_outer)});
-    vertices.push_back({at + w_outer * side, in.object, packed_u, packed_w, std::abs(w_outer - shared)});
+    vertices.push_back({at + u_outer * side, in.object, packed_u, packed_w,
+                        -std::abs(shared - u_outer), members_before, last});
+    vertices.push_back({at + w_outer * side, in.object, packed_u, packed_w,
+                        std::abs(w_outer - shared), members_before, last});
   };
   const auto base = static_cast<uint32_t>(vertices.size());
-  section(centre - along);
-  section(centre + along);
+  section(centre - along, 0.0f);
+  section(centre + along, float(last + 1));
   // Outer edge of the first face at each end (base, base + 2), of the second (base + 1, + 3).
   batch.indices[kBeams].insert(batch.indices[kBeams].end(),
                                {base, base + 1, base + 3, base, base + 3, base + 2});

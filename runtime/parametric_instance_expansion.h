@@ -30,13 +30,17 @@ struct SmoothVertex {
   uint32_t normal;     // packNormal
 };
 
-// One vertex of a thin beam's band (appendBeamRibbon): 28 bytes.
+// One vertex of a thin beam's band (appendBeamRibbon): 36 bytes. A band may stand for a row of
+// beams end to end (box_rows.h): a fragment's object is `object` plus the whole part of `along`,
+// at most `last`.
 struct BeamVertex {
   glm::vec3 position;  // metres from the eye
-  uint32_t object;     // object index
+  uint32_t object;     // object index (a row's first member's)
   uint32_t normal_u;   // packNormal: the first long face's
   uint32_t normal_w;   // and the second's
   float across;        // signed metres from the edge where the faces meet (< 0: first face)
+  float along;         // members from the band's start: 0 there, the member count at its end
+  uint32_t last;       // the member count less one (0: one beam)
 };
 
 // One vertex of a row of boxes (appendBoxRow): 24 bytes. A fragment's object is `object` plus
@@ -115,9 +119,10 @@ void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
 // than a pixel across its two shorter axes, as a band along its longest axis `axis` facing the
 // eye, as wide as its cross-section seen from there, each side of the edge where the two long
 // faces the eye sees meet shaded with its own face's normal. The box's half sizes are the
-// bounds' (`b.size`), so the profile is not read again.
+// bounds' (`b.size`), so the profile is not read again. `members` > 1: `in` and `b` are a row of
+// that many equal beams end to end along `axis` (box_rows.h), objects `in.object` onward.
 void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
-                      const glm::vec3& anchor_eye, int axis);
+                      const glm::vec3& anchor_eye, int axis, uint32_t members = 1);
 
 // Appends a point at `at` (eye-relative) for object `object`.
 void appendPoint(InstanceBatch& batch, uint32_t object, const glm::vec3& at);

@@ -261,9 +261,10 @@ struct ParametricInstanceMeshes::Impl {
                       static_cast<float>(choice.view.min_thin_px) * metres_per_px);
   }
 
-  // A row of boxes whose first member is `i` (bounds[i] are the row's): one box when the row is
-  // a box at its distance, each member on its own otherwise (thin or left out as a whole, the
-  // members are at most what it is). Recorded drawn as the row: the pyramid's tests take its box.
+  // A row whose first member is `i` (bounds[i] are the row's): one box when the row of boxes is
+  // a box at its distance, one band when the row is thin across its own axis (appendBeamRibbon),
+  // each member on its own otherwise (left out as a whole, the members are at most what it is).
+  // Recorded drawn as the row: the pyramid's tests take its box.
   void placeRow(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
@@ -277,21 +278,30 @@ struct ParametricInstanceMeshes::Impl {
       return;
     }
     if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
-    if (form.shape == Shape::Box) {
+    const uint32_t members = uint32_t(row.instances.size());
+    if (form.shape == Shape::Box && b.type == uint8_t(pkg::PrimitiveType::Box)) {
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach), false);
-      stats.instances_drawn += row.instances.size();
+      stats.instances_drawn += members;
       appendBoxRow(part.batch, row.record, b, anchor_eye, form, unitMesh(form.shape, form.a, form.b),
-                   uint32_t(row.instances.size()), row.axis);
+                   members, row.axis);
       return;
     }
-    // Each member's bounds are relative to its own cluster's anchor.
+    if (form.shape == Shape::Ribbon && form.box_frame && form.long_axis == row.axis) {
+      stats.instances_drawn += members;
+      stats.thin_instances += members;
+      appendBeamRibbon(part.batch, row.record, b, anchor_eye, row.axis, members);
+      return;
+    }
+    // Each member's bounds are relative to its own cluster's anchor, and a member drawn from its
+    // profile is handed back with its own cluster (ParametricMeshes finds it in that cluster's
+    // meshes).
     const auto instances = view->instances();
     const auto records = view->clusters();
     for (size_t k = 0; k < row.instances.size(); ++k) {
       const uint32_t m = row.instances[k], cluster = row.member_clusters[k];
       const glm::vec3 member_anchor_eye =
           cluster == c ? anchor_eye : glm::vec3(clusterAnchor(records[cluster]) - choice.view.eye);
-      placeOne(part, c, member_anchor_eye, m, k == 0 ? row_first_bounds[r] : bounds[m],
+      placeOne(part, cluster, member_anchor_eye, m, k == 0 ? row_first_bounds[r] : bounds[m],
                instances[m], false);
     }
   }
@@ -564,7 +574,7 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
                     });
   // Rows of boxes: only where the preprocessor marked covered faces (the faces between members).
   if (options.box_rows && (view.header().flags & pkg::kHeaderCoveredFacesMarked)) {
-    s.rows = findBoxRows(instances, clusters);
+    s.rows = findBoxRows(instances, clusters, view.profilePoints());
     s.row_first_bounds.reserve(s.rows.size());
     for (const BoxRow& row : s.rows) {
       const uint32_t first = row.instances.front();
@@ -635,7 +645,11 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
   glVertexArrayAttribFormat(beams, 3, 4, GL_INT_2_10_10_10_REV, GL_TRUE, offsetof(BeamVertex, normal_w));
   glEnableVertexArrayAttrib(beams, 4);
   glVertexArrayAttribFormat(beams, 4, 1, GL_FLOAT, GL_FALSE, offsetof(BeamVertex, across));
-  for (GLuint attribute = 0; attribute < 5; ++attribute)
+  glEnableVertexArrayAttrib(beams, 5);
+  glVertexArrayAttribFormat(beams, 5, 1, GL_FLOAT, GL_FALSE, offsetof(BeamVertex, along));
+  glEnableVertexArrayAttrib(beams, 6);
+  glVertexArrayAttribIFormat(beams, 6, 1, GL_UNSIGNED_INT, offsetof(BeamVertex, last));
+  for (GLuint attribute = 0; attribute < 7; ++attribute)
     glVertexArrayAttribBinding(beams, attribute, 0);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
     char message[96];

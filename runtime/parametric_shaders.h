@@ -484,10 +484,14 @@ layout(location = 1) in uint object;
 layout(location = 2) in vec3 normal_u;  // world, unit: the first face's
 layout(location = 3) in vec3 normal_w;  // and the second's
 layout(location = 4) in float across;   // < 0 over the first face, > 0 over the second
+layout(location = 5) in float along;    // members from the band's start (a row of beams)
+layout(location = 6) in uint last;      // the member count less one
 layout(location = 0) uniform mat4 view_projection;
 out vec3 pos_eye;
 out float v_across;
+out float v_along;
 flat out uint v_object;
+flat out uint v_last;
 flat out vec4 v_base;
 flat out vec3 v_normal_u;
 flat out vec3 v_normal_w;
@@ -495,7 +499,9 @@ flat out vec3 v_normal_w;
 void main() {
   pos_eye = position;
   v_across = across;
+  v_along = along;
   v_object = object;
+  v_last = last;
   v_base = objectBaseColor(object);
   v_normal_u = normal_u;
   v_normal_w = normal_w;
@@ -508,8 +514,10 @@ inline std::string parametricBeamFragmentShader() {
   return std::string(R"(#version 450 core
 in vec3 pos_eye;
 in float v_across;
+in float v_along;
 flat in uint v_object;
-flat in vec4 v_base;
+flat in uint v_last;
+flat in vec4 v_base;  // the first member's colour
 flat in vec3 v_normal_u;
 flat in vec3 v_normal_w;
 layout(location = 0) out vec4 out_color;
@@ -522,8 +530,12 @@ void main() {
   vec3 face = v_across < 0.0 ? v_normal_u : v_normal_w;
   float len = max(length(face), 1e-30);
   vec3 n = dot(face, facet) < 0.0 ? -face / len : face / len;
-  out_color = shadeSeenSide(v_base, n, pos_eye);
-  out_id = v_object + 1u;
+  // A row of beams: the member under the fragment, and its colour unless it is the first's.
+  uint object = v_object + min(uint(max(v_along, 0.0)), v_last);
+  vec4 base = v_base;
+  if (object != v_object) base = objectBaseColor(object);
+  out_color = shadeSeenSide(base, n, pos_eye);
+  out_id = object + 1u;
 }
 )";
 }

@@ -19,10 +19,10 @@ InstanceBatch pointsAt(const std::vector<glm::vec3>& at) {
 TEST(InstanceBatch, AppendOffsetsEachBatchsIndices) {
   InstanceBatch a = pointsAt({{1, 1, 0}, {2, 2, 0}});
   InstanceBatch b = pointsAt({{3, 3, 0}});
-  b.beam_vertices.push_back({glm::vec3(0.0f), 7u, 0u, 0u, 0.0f});
+  b.beam_vertices.push_back({glm::vec3(0.0f), 7u, 0u, 0u, 0.0f, 0.0f, 0u});
   b.indices[kBeams] = {0, 0, 0};
   b.indices[kTwoSided] = {0, 0, 0};
-  a.beam_vertices.push_back({glm::vec3(0.0f), 6u, 0u, 0u, 0.0f});
+  a.beam_vertices.push_back({glm::vec3(0.0f), 6u, 0u, 0u, 0.0f, 0.0f, 0u});
   a.append(b);
   // Points and triangles index the smooth vertices, beams their own.
   EXPECT_EQ(a.indices[kPoints], (std::vector<uint32_t>{0, 1, 2}));

@@ -390,8 +390,11 @@ TEST_F(ParametricRendering, RowsOfBoxesDrawTheFrameTheirBoxesDraw) {
     EXPECT_GT(shown, 200u);
     EXPECT_LE(differ * 500, shown) << differ << " of " << shown << " pixels shown differ";
   }
-  // So far away that a row is under a pixel across (a ribbon): its plates are drawn one by one,
-  // each from its own cluster's anchor, as points.
+  // So far away that a row is under a pixel across but longer than one (a ribbon) and its plates
+  // under a pixel every way (points): a row is one band, two triangles, where its plates drawn
+  // one by one are four points; the band shows a plate of its row where the points do, within a
+  // pixel (fewer pixels: a band under a pixel wide covers the pixel centres it crosses, where a
+  // point always lights one).
   Camera far_away = lookingAt({-1000.0, -900.0, 600.0}, {16.0, 10.5, 0.0});
   far_away.far_m = 5000.0;
   const Frame rows = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
@@ -401,11 +404,85 @@ TEST_F(ParametricRendering, RowsOfBoxesDrawTheFrameTheirBoxesDraw) {
   EXPECT_EQ(rows.stats.parametric_instances_drawn, 12u);
   EXPECT_EQ(rows.stats.parametric_thin_instances, 12u);
   EXPECT_EQ(boxes.stats.parametric_thin_instances, 12u);
-  uint64_t shown = 0;
-  for (uint32_t id : boxes.ids) shown += id != 0u;
-  EXPECT_GT(shown, 3u);
-  EXPECT_EQ(rows.ids, boxes.ids);
-  EXPECT_EQ(rows.rgba, boxes.rgba);
+  EXPECT_EQ(rows.stats.parametric_triangles, 6u);
+  EXPECT_EQ(boxes.stats.parametric_triangles, 0u);
+  uint64_t shown_rows = 0, shown_boxes = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const uint32_t id = rows.ids[size_t(y) * kWidth + size_t(x)];
+      shown_boxes += boxes.ids[size_t(y) * kWidth + size_t(x)] != 0u;
+      if (id == 0u) continue;
+      ++shown_rows;
+      const uint32_t row = (id - 1) / 4;  // objects 1-4, 5-8, 9-12
+      bool near = false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx < 0 || ny < 0 || nx >= kWidth || ny >= kHeight) continue;
+          const uint32_t other = boxes.ids[size_t(ny) * kWidth + size_t(nx)];
+          near = near || (other != 0u && (other - 1) / 4 == row);
+        }
+      EXPECT_TRUE(near) << "pixel " << x << ", " << y << " shows object " << id;
+    }
+  EXPECT_GT(shown_boxes, 3u);
+  EXPECT_GT(shown_rows, 0u);
+}
+
+std::vector<glm::vec2> smallIBeam();  // below
+
+// A frame line of I-beams end to end, each its own object and colour: from afar, thin across, the
+// line is one band whose fragments tell the beam they fall on, where each beam on its own is a
+// band of its own; close by, where the beams are not thin, each is drawn as without rows.
+TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
+  const std::vector<glm::vec2> beam = smallIBeam();
+  std::vector<Part> parts;
+  for (int k = 0; k < 4; ++k) {
+    Transform t = placed({8.0 * k, 0.0, 0.0});
+    // The extrusion axis (local Z) along world X, the web (local Y) up.
+    t.linear = glm::mat3(glm::vec3(0, 1, 0), glm::vec3(0, 0, 1), glm::vec3(1, 0, 0));
+    parts.push_back({uint32_t(1 + k), Extrusion{beam, 8.0f}, t, 0xff000000u | (0x2f4b1du * uint32_t(1 + k))});
+  }
+  const fs::path package = buildPackage("beam_rows", parts, false, {}, 2);
+  // Slanted across the pixel rows: a band under a pixel wide lit where it crosses their centres.
+  const Camera far_away = lookingAt({-10.0, -80.0, 28.8}, {16.0, 0.0, 2.0});
+  const Frame rows = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
+                            nullptr, false, 0.25, 0.0, 32, 8192, true, true);
+  const Frame beams = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
+                             nullptr, false, 0.25, 0.0, 32, 8192, true, false);
+  EXPECT_EQ(beams.stats.parametric_thin_instances, 4u);
+  EXPECT_EQ(rows.stats.parametric_thin_instances, 4u);
+  EXPECT_EQ(beams.stats.parametric_triangles, 8u);
+  EXPECT_EQ(rows.stats.parametric_triangles, 2u);
+  uint64_t shown = 0, differ = 0;
+  for (int y = 0; y < kHeight; ++y)
+    for (int x = 0; x < kWidth; ++x) {
+      const size_t p = size_t(y) * kWidth + size_t(x);
+      shown += beams.ids[p] != 0u;
+      if (rows.ids[p] == beams.ids[p] &&
+          std::equal(&rows.rgba[4 * p], &rows.rgba[4 * p] + 4, &beams.rgba[4 * p]))
+        continue;
+      ++differ;
+      bool near = false;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int nx = x + dx, ny = y + dy;
+          if (nx >= 0 && ny >= 0 && nx < kWidth && ny < kHeight)
+            near = near || beams.ids[size_t(ny) * kWidth + size_t(nx)] == rows.ids[p];
+        }
+      EXPECT_TRUE(near) << "pixel " << x << ", " << y;
+    }
+  EXPECT_GT(shown, 20u);
+  EXPECT_LE(differ * 5, shown) << differ << " of " << shown << " pixels shown differ";
+  // Close by the beams are their profiles or boxes, drawn one by one either way.
+  const Camera close = lookingAt({-10.0, -20.0, 7.2}, {16.0, 0.0, 2.0});
+  const Frame rows_close = render(package, close, ParametricMode::Tessellated, OcclusionMode::Off,
+                                  nullptr, false, 0.25, 0.0, 32, 8192, true, true);
+  const Frame beams_close = render(package, close, ParametricMode::Tessellated, OcclusionMode::Off,
+                                   nullptr, false, 0.25, 0.0, 32, 8192, true, false);
+  EXPECT_EQ(rows_close.stats.parametric_thin_instances, 0u);
+  EXPECT_EQ(rows_close.stats.parametric_triangles, beams_close.stats.parametric_triangles);
+  EXPECT_EQ(rows_close.ids, beams_close.ids);
+  EXPECT_EQ(rows_close.rgba, beams_close.rgba);
 }
 
 // A deck plate 15 cm thick: where its rims are narrower than min_thin_px (0.4) at its nearest
