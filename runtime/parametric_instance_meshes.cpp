@@ -90,6 +90,16 @@ struct ParametricInstanceMeshes::Impl {
                                      std::pair<uint32_t, uint32_t>(i, 0));
     return at != row_member_clusters.end() && at->first == i && cluster_in_frame[at->second];
   }
+  // The lists of instances drawn, deferred and left for the test hold entries: an instance
+  // index, with kAlone set for a row's member considered on its own (considerMembers), not as
+  // its row (a row's first member then has row_first_bounds, not the row's bounds).
+  static constexpr uint32_t kAlone = 1u << 31;
+  static constexpr uint32_t kNotListed = ~0u;  // placeOne: not listed as drawn
+  const InstanceBounds& entryBounds(uint32_t entry) const {
+    const uint32_t i = entry & ~kAlone;
+    if ((entry & kAlone) && bounds[i].row >= 2) return row_first_bounds[rowOf(i)];
+    return bounds[i];
+  }
   // The row whose first member is instance `i`.
   size_t rowOf(uint32_t i) const {
     return size_t(std::lower_bound(rows.begin(), rows.end(), i,
@@ -164,7 +174,7 @@ struct ParametricInstanceMeshes::Impl {
   ExpandedPart frame;
   std::vector<ExpandedPart> parts;
   // Occlusion: per instance, hidden by last frame's final depth; this frame's first-pass
-  // instances left for the second pass, and every instance drawn (cluster, instance).
+  // instances left for the second pass, and every instance drawn (cluster, entry; kAlone).
   std::vector<uint8_t> hidden_last;
   std::vector<std::pair<uint32_t, uint32_t>> deferred, drawn;
   // Which of the instances last tested (testAll) the pyramid hides.
@@ -181,7 +191,7 @@ struct ParametricInstanceMeshes::Impl {
                       [&](const tbb::blocked_range<size_t>& range) {
                         for (size_t k = range.begin(); k != range.end(); ++k) {
                           const auto [c, i] = list[k];
-                          const InstanceBounds& b = bounds[i];
+                          const InstanceBounds& b = entryBounds(i);
                           const glm::vec3 centre =
                               glm::vec3(clusterAnchor(records[c]) - eye_at) + b.centre;
                           test_hidden[k] = box_hidden(centre - b.extent, centre + b.extent) ? 1 : 0;
@@ -241,12 +251,13 @@ struct ParametricInstanceMeshes::Impl {
 
   // Draws one visible instance of cluster `c` (anchor_eye: its anchor relative to the eye) into
   // `part`. Called from several threads at once, each with its own part.
-  void place(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
-    if (bounds[i].row >= 2) {
+  void place(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t entry) {
+    const uint32_t i = entry & ~kAlone;
+    if (!(entry & kAlone) && bounds[i].row >= 2) {
       placeRow(part, c, anchor_eye, i);
       return;
     }
-    placeOne(part, c, anchor_eye, i, bounds[i], view->instances()[i], true);
+    placeOne(part, c, anchor_eye, i, entryBounds(entry), view->instances()[i], entry);
   }
 
   // The form of an instance with bounds `b` at its distance (set, with the metres a pixel spans
@@ -261,10 +272,20 @@ struct ParametricInstanceMeshes::Impl {
                       static_cast<float>(choice.view.min_thin_px) * metres_per_px);
   }
 
+  // Whether the row with bounds `b` and form `form` at its distance is drawn whole: one box, one
+  // band, or nothing. Otherwise its members are drawn one by one, and culled one by one too.
+  static bool drawnWhole(const Form& form, const InstanceBounds& b, const BoxRow& row) {
+    return form.shape == Shape::None ||
+           (form.shape == Shape::Box && b.type == uint8_t(pkg::PrimitiveType::Box)) ||
+           (form.shape == Shape::Ribbon && form.box_frame && form.long_axis == row.axis);
+  }
+
   // A row whose first member is `i` (bounds[i] are the row's): one box when the row of boxes is
   // a box at its distance, one band when the row is thin across its own axis (appendBeamRibbon),
   // each member on its own otherwise (left out as a whole, the members are at most what it is).
-  // Recorded drawn as the row: the pyramid's tests take its box.
+  // Recorded drawn as the row: the pyramid's tests take its box. consider() hands a row that is
+  // not drawn whole to considerMembers() instead; the members are placed here only if the form
+  // chosen here differs from the one chosen there.
   void placeRow(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
@@ -302,13 +323,14 @@ struct ParametricInstanceMeshes::Impl {
       const glm::vec3 member_anchor_eye =
           cluster == c ? anchor_eye : glm::vec3(clusterAnchor(records[cluster]) - choice.view.eye);
       placeOne(part, cluster, member_anchor_eye, m, k == 0 ? row_first_bounds[r] : bounds[m],
-               instances[m], false);
+               instances[m], kNotListed);
     }
   }
 
-  // Instance `i` of cluster `c`, bounds `b`, record `in`; listed drawn when `record_drawn`.
+  // Instance `i` of cluster `c`, bounds `b`, record `in`; listed drawn as `entry` unless that is
+  // kNotListed.
   void placeOne(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i,
-                const InstanceBounds& b, const pkg::InstanceRecord& in, bool record_drawn) {
+                const InstanceBounds& b, const pkg::InstanceRecord& in, uint32_t entry) {
     InstanceLodStats& stats = part.stats;
     double distance = 0.0;
     float metres_per_px = 0.0f;
@@ -321,7 +343,7 @@ struct ParametricInstanceMeshes::Impl {
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach),
                     ((b.flags & kRunMember) && eye_clear_of_runs) ||
                         (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, choice.near_reach)));
-    if (record_drawn && choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
+    if (entry != kNotListed && choice.view.pass != InstancePass::All) part.drawn.push_back({c, entry});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
       FaceCull cull = FaceCull::None;
@@ -354,30 +376,64 @@ struct ParametricInstanceMeshes::Impl {
                   unitMesh(form.shape, form.a, form.b));
   }
 
-  // One instance of cluster `c`: culled, deferred, left for the pyramid's test, or placed.
-  void consider(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
-    InstanceLodStats& stats = part.stats;
-    const InstanceBounds& b = bounds[i];
-    if (!(b.flags & kValid) || (b.row == kDrawnWithRow && leftToItsRow(i))) return;
-    ++stats.instances_tested;
+  // Whether bounds `b` (anchor at `anchor_eye`) lie outside the frustum or under the smallest
+  // feature.
+  bool outsideView(const InstanceBounds& b, const glm::vec3& anchor_eye) const {
     const glm::vec3 centre = anchor_eye + b.centre;
     const double px_per_m = choice.pixel_scale / distanceOf(b, centre);
     bool outside = 2.0 * b.radius * px_per_m < choice.view.min_feature_px;
     for (const glm::vec4& plane : choice.planes)
       outside = outside || glm::dot(glm::vec3(plane), centre) + plane.w < -b.radius;
-    if (outside) {
+    return outside;
+  }
+
+  // One instance of cluster `c` (an entry: kAlone set for a row's first member on its own):
+  // culled, deferred, left for the pyramid's test, or placed. A row not drawn whole at its
+  // distance goes member by member (considerMembers).
+  void consider(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t entry) {
+    InstanceLodStats& stats = part.stats;
+    const uint32_t i = entry & ~kAlone;
+    const InstanceBounds& b = entryBounds(entry);
+    if (!(b.flags & kValid) || (!(entry & kAlone) && b.row == kDrawnWithRow && leftToItsRow(i)))
+      return;
+    if (outsideView(b, anchor_eye)) {
+      ++stats.instances_tested;
       ++stats.instances_culled;
       return;
     }
+    if (!(entry & kAlone) && b.row >= 2) {
+      double distance = 0.0;
+      float metres_per_px = 0.0f;
+      const BoxRow& row = rows[rowOf(i)];
+      if (!drawnWhole(formOf(b, anchor_eye, distance, metres_per_px), b, row)) {
+        considerMembers(part, c, anchor_eye, row);
+        return;
+      }
+    }
+    ++stats.instances_tested;
     if (choice.view.pass == InstancePass::First && hidden_last[i]) {
-      part.deferred.push_back({c, i});  // hidden last frame: the second pass tests it
+      part.deferred.push_back({c, entry});  // hidden last frame: the second pass tests it
       return;
     }
     if (choice.test) {
-      part.to_test.push_back({c, i});
+      part.to_test.push_back({c, entry});
       return;
     }
-    place(part, c, anchor_eye, i);
+    place(part, c, anchor_eye, entry);
+  }
+
+  // The members of `row` (first member's cluster `c`, its anchor at `anchor_eye`), each
+  // considered on its own, with its own bounds and cluster: a long row of beams seen close by
+  // is culled beam by beam, by the frustum and by the pyramid, as its beams are without rows.
+  void considerMembers(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye,
+                       const BoxRow& row) {
+    const auto records = view->clusters();
+    for (size_t k = 0; k < row.instances.size(); ++k) {
+      const uint32_t m = row.instances[k], cluster = row.member_clusters[k];
+      const glm::vec3 member_anchor_eye =
+          cluster == c ? anchor_eye : glm::vec3(clusterAnchor(records[cluster]) - choice.view.eye);
+      consider(part, cluster, member_anchor_eye, m | kAlone);
+    }
   }
 
   // Considers every instance of frame_clusters[begin, end) into `part`, in cluster order.
@@ -522,9 +578,10 @@ void ParametricInstanceMeshes::recordVisible(
   Impl& s = *impl_;
   if (box_hidden) {
     s.testAll(s.drawn, s.eye, box_hidden);
-    for (size_t k = 0; k < s.drawn.size(); ++k) s.hidden_last[s.drawn[k].second] = s.test_hidden[k];
+    for (size_t k = 0; k < s.drawn.size(); ++k)
+      s.hidden_last[s.drawn[k].second & ~Impl::kAlone] = s.test_hidden[k];
   } else {
-    for (const auto& [c, i] : s.drawn) s.hidden_last[i] = 0;
+    for (const auto& [c, i] : s.drawn) s.hidden_last[i & ~Impl::kAlone] = 0;
   }
   s.drawn.clear();
 }
@@ -572,8 +629,10 @@ ParametricInstanceMeshes::ParametricInstanceMeshes(const PackageView& view,
                           s.bounds[i] = boundsOf(instances[i], view.profilePoints(), anchor);
                       }
                     });
-  // Rows of boxes: only where the preprocessor marked covered faces (the faces between members).
-  if (options.box_rows && (view.header().flags & pkg::kHeaderCoveredFacesMarked)) {
+  // Rows of boxes: only where the preprocessor marked covered faces (the faces between members),
+  // and the instance indices leave Impl::kAlone free.
+  if (options.box_rows && (view.header().flags & pkg::kHeaderCoveredFacesMarked) &&
+      instances.size() < Impl::kAlone) {
     s.rows = findBoxRows(instances, clusters, view.profilePoints());
     s.row_first_bounds.reserve(s.rows.size());
     for (const BoxRow& row : s.rows) {
@@ -789,7 +848,7 @@ InstanceLodStats ParametricInstanceMeshes::prepare(std::span<const uint32_t> clu
     for (size_t k = 0; k < to_test.size(); ++k) {
       const auto [c, i] = to_test[k];
       if (s.test_hidden[k]) {
-        s.hidden_last[i] = 1;
+        s.hidden_last[i & ~Impl::kAlone] = 1;
         ++s.frame.stats.instances_occluded;
       } else {
         s.place(s.frame, c, glm::vec3(clusterAnchor(records[c]) - view.eye), i);

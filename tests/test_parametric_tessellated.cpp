@@ -480,9 +480,56 @@ TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
   const Frame beams_close = render(package, close, ParametricMode::Tessellated, OcclusionMode::Off,
                                    nullptr, false, 0.25, 0.0, 32, 8192, true, false);
   EXPECT_EQ(rows_close.stats.parametric_thin_instances, 0u);
+  EXPECT_EQ(rows_close.stats.parametric_instances_drawn, beams_close.stats.parametric_instances_drawn);
   EXPECT_EQ(rows_close.stats.parametric_triangles, beams_close.stats.parametric_triangles);
   EXPECT_EQ(rows_close.ids, beams_close.ids);
   EXPECT_EQ(rows_close.rgba, beams_close.rgba);
+}
+
+// The same frame line close by, where its beams are drawn one by one: they are culled one by one
+// too, by the frustum and behind a wall by the pyramid, as without rows (a row tested as one box
+// would draw every beam whenever any part of it shows).
+TEST_F(ParametricRendering, RowsDrawnBeamByBeamAreCulledBeamByBeam) {
+  const std::vector<glm::vec2> beam = smallIBeam();
+  std::vector<Part> parts;
+  for (int k = 0; k < 4; ++k) {
+    Transform t = placed({8.0 * k, 0.0, 0.0});
+    t.linear = glm::mat3(glm::vec3(0, 1, 0), glm::vec3(0, 0, 1), glm::vec3(1, 0, 0));
+    parts.push_back({uint32_t(1 + k), Extrusion{beam, 8.0f}, t, 0xff000000u | (0x2f4b1du * uint32_t(1 + k))});
+  }
+  // A wall before the first two beams, seen from (16, -20, 1).
+  parts.push_back({5u, Box{glm::vec3(8.5f, 0.1f, 3.0f)}, placed({8.0, -5.0, 0.0}), 0xff808080u});
+  // One cluster holds them all: its box shows, so each beam must be tested on its own.
+  const fs::path package = buildPackage("beam_rows_culled", parts, false);
+  for (OcclusionMode occlusion : {OcclusionMode::Off, OcclusionMode::Hzb}) {
+    // Beside the last beam, the first two out of view.
+    const Camera beside = lookingAt({28.0, -6.0, 1.0}, {28.0, 0.0, 0.1});
+    const Frame rows = render(package, beside, ParametricMode::Tessellated, occlusion, nullptr,
+                              false, 0.25, 0.0, 32, 8192, true, true);
+    const Frame beams = render(package, beside, ParametricMode::Tessellated, occlusion, nullptr,
+                               false, 0.25, 0.0, 32, 8192, true, false);
+    EXPECT_LE(beams.stats.parametric_instances_drawn, 3u);  // beams 3 and 4, and the wall
+    EXPECT_EQ(rows.stats.parametric_instances_drawn, beams.stats.parametric_instances_drawn);
+    EXPECT_EQ(rows.stats.parametric_triangles, beams.stats.parametric_triangles);
+    EXPECT_EQ(rows.ids, beams.ids);
+    EXPECT_EQ(rows.rgba, beams.rgba);
+  }
+  const Camera facing = lookingAt({16.0, -20.0, 1.0}, {16.0, 0.0, 0.1});
+  const Frame rows = render(package, facing, ParametricMode::Tessellated, OcclusionMode::Hzb,
+                            nullptr, false, 0.25, 0.0, 32, 8192, true, true);
+  const Frame beams = render(package, facing, ParametricMode::Tessellated, OcclusionMode::Hzb,
+                             nullptr, false, 0.25, 0.0, 32, 8192, true, false);
+  const Frame open = render(package, facing, ParametricMode::Tessellated, OcclusionMode::Off,
+                            nullptr, false, 0.25, 0.0, 32, 8192, true, true);
+  EXPECT_EQ(open.stats.parametric_instances_drawn, 5u);
+  EXPECT_LE(beams.stats.parametric_instances_drawn, 3u);  // beams 1 and 2 behind the wall
+  EXPECT_EQ(rows.stats.parametric_instances_drawn, beams.stats.parametric_instances_drawn);
+  EXPECT_EQ(rows.stats.parametric_triangles, beams.stats.parametric_triangles);
+  EXPECT_EQ(rows.ids, beams.ids);
+  EXPECT_EQ(rows.rgba, beams.rgba);
+  uint64_t wall = 0;
+  for (uint32_t id : rows.ids) wall += id == 5u;
+  EXPECT_GT(wall, 1000u);
 }
 
 // A deck plate 15 cm thick: where its rims are narrower than min_thin_px (0.4) at its nearest
