@@ -94,7 +94,6 @@ struct ParametricInstanceMeshes::Impl {
   // index, with kAlone set for a row's member considered on its own (considerMembers), not as
   // its row (a row's first member then has row_first_bounds, not the row's bounds).
   static constexpr uint32_t kAlone = 1u << 31;
-  static constexpr uint32_t kNotListed = ~0u;  // placeOne: not listed as drawn
   const InstanceBounds& entryBounds(uint32_t entry) const {
     const uint32_t i = entry & ~kAlone;
     if ((entry & kAlone) && bounds[i].row >= 2) return row_first_bounds[rowOf(i)];
@@ -254,7 +253,9 @@ struct ParametricInstanceMeshes::Impl {
   void place(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t entry) {
     const uint32_t i = entry & ~kAlone;
     if (!(entry & kAlone) && bounds[i].row >= 2) {
-      placeRow(part, c, anchor_eye, i);
+      double distance = 0.0;
+      float metres_per_px = 0.0f;
+      placeRow(part, c, anchor_eye, i, formOf(bounds[i], anchor_eye, distance, metres_per_px));
       return;
     }
     placeOne(part, c, anchor_eye, i, entryBounds(entry), view->instances()[i], entry);
@@ -280,55 +281,34 @@ struct ParametricInstanceMeshes::Impl {
            (form.shape == Shape::Ribbon && form.box_frame && form.long_axis == row.axis);
   }
 
-  // A row whose first member is `i` (bounds[i] are the row's): one box when the row of boxes is
-  // a box at its distance, one band when the row is thin across its own axis (appendBeamRibbon),
-  // each member on its own otherwise (left out as a whole, the members are at most what it is).
-  // Recorded drawn as the row: the pyramid's tests take its box. consider() hands a row that is
-  // not drawn whole to considerMembers() instead; the members are placed here only if the form
-  // chosen here differs from the one chosen there.
-  void placeRow(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i) {
+  // A row whose first member is `i` (bounds[i] are the row's), drawn whole in `form` (one that
+  // drawnWhole accepts): nothing, one box when the row of boxes is a box at its distance, or one
+  // band when the row is thin across its own axis (appendBeamRibbon). consider() sends every
+  // other row member by member, and a row's form is the same in both passes of a frame.
+  // Recorded drawn as the row: the pyramid's tests take its box.
+  void placeRow(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i,
+                Form form) {
     InstanceLodStats& stats = part.stats;
     const InstanceBounds& b = bounds[i];
-    const size_t r = rowOf(i);
-    const BoxRow& row = rows[r];
-    double distance = 0.0;
-    float metres_per_px = 0.0f;
-    Form form = formOf(b, anchor_eye, distance, metres_per_px);
+    const BoxRow& row = rows[rowOf(i)];
+    const uint32_t members = uint32_t(row.instances.size());
     if (form.shape == Shape::None) {
-      stats.instances_culled += row.instances.size();
+      stats.instances_culled += members;
       return;
     }
     if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
-    const uint32_t members = uint32_t(row.instances.size());
-    if (form.shape == Shape::Box && b.type == uint8_t(pkg::PrimitiveType::Box)) {
+    stats.instances_drawn += members;
+    if (form.shape == Shape::Box) {
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach), false);
-      stats.instances_drawn += members;
       appendBoxRow(part.batch, row.record, b, anchor_eye, form, unitMesh(form.shape, form.a, form.b),
                    members, row.axis);
       return;
     }
-    if (form.shape == Shape::Ribbon && form.box_frame && form.long_axis == row.axis) {
-      stats.instances_drawn += members;
-      stats.thin_instances += members;
-      appendBeamRibbon(part.batch, row.record, b, anchor_eye, row.axis, members);
-      return;
-    }
-    // Each member's bounds are relative to its own cluster's anchor, and a member drawn from its
-    // profile is handed back with its own cluster (ParametricMeshes finds it in that cluster's
-    // meshes).
-    const auto instances = view->instances();
-    const auto records = view->clusters();
-    for (size_t k = 0; k < row.instances.size(); ++k) {
-      const uint32_t m = row.instances[k], cluster = row.member_clusters[k];
-      const glm::vec3 member_anchor_eye =
-          cluster == c ? anchor_eye : glm::vec3(clusterAnchor(records[cluster]) - choice.view.eye);
-      placeOne(part, cluster, member_anchor_eye, m, k == 0 ? row_first_bounds[r] : bounds[m],
-               instances[m], kNotListed);
-    }
+    stats.thin_instances += members;
+    appendBeamRibbon(part.batch, row.record, b, anchor_eye, row.axis, members);
   }
 
-  // Instance `i` of cluster `c`, bounds `b`, record `in`; listed drawn as `entry` unless that is
-  // kNotListed.
+  // Instance `i` of cluster `c`, bounds `b`, record `in`; listed drawn as `entry`.
   void placeOne(ExpandedPart& part, uint32_t c, const glm::vec3& anchor_eye, uint32_t i,
                 const InstanceBounds& b, const pkg::InstanceRecord& in, uint32_t entry) {
     InstanceLodStats& stats = part.stats;
@@ -343,7 +323,7 @@ struct ParametricInstanceMeshes::Impl {
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach),
                     ((b.flags & kRunMember) && eye_clear_of_runs) ||
                         (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, choice.near_reach)));
-    if (entry != kNotListed && choice.view.pass != InstancePass::All) part.drawn.push_back({c, entry});
+    if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, entry});
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
       FaceCull cull = FaceCull::None;
@@ -401,11 +381,14 @@ struct ParametricInstanceMeshes::Impl {
       ++stats.instances_culled;
       return;
     }
-    if (!(entry & kAlone) && b.row >= 2) {
+    const bool row_head = !(entry & kAlone) && b.row >= 2;
+    Form row_form;
+    if (row_head) {
       double distance = 0.0;
       float metres_per_px = 0.0f;
       const BoxRow& row = rows[rowOf(i)];
-      if (!drawnWhole(formOf(b, anchor_eye, distance, metres_per_px), b, row)) {
+      row_form = formOf(b, anchor_eye, distance, metres_per_px);
+      if (!drawnWhole(row_form, b, row)) {
         considerMembers(part, c, anchor_eye, row);
         return;
       }
@@ -419,7 +402,10 @@ struct ParametricInstanceMeshes::Impl {
       part.to_test.push_back({c, entry});
       return;
     }
-    place(part, c, anchor_eye, entry);
+    if (row_head)
+      placeRow(part, c, anchor_eye, i, row_form);
+    else
+      placeOne(part, c, anchor_eye, i, b, view->instances()[i], entry);
   }
 
   // The members of `row` (first member's cluster `c`, its anchor at `anchor_eye`), each

@@ -433,7 +433,8 @@ std::vector<glm::vec2> smallIBeam();  // below
 // A frame line of I-beams end to end, each its own object and colour: from afar, thin across, the
 // line is one band whose fragments tell the beam they fall on, where each beam on its own is a
 // band of its own; close by, where the beams are not thin, each is drawn as without rows.
-TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
+// A frame line: four I-beams of 8 m end to end along X (objects 1 to 4, colours of their own).
+std::vector<Part> frameLineOfBeams() {
   const std::vector<glm::vec2> beam = smallIBeam();
   std::vector<Part> parts;
   for (int k = 0; k < 4; ++k) {
@@ -442,7 +443,11 @@ TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
     t.linear = glm::mat3(glm::vec3(0, 1, 0), glm::vec3(0, 0, 1), glm::vec3(1, 0, 0));
     parts.push_back({uint32_t(1 + k), Extrusion{beam, 8.0f}, t, 0xff000000u | (0x2f4b1du * uint32_t(1 + k))});
   }
-  const fs::path package = buildPackage("beam_rows", parts, false, {}, 2);
+  return parts;
+}
+
+TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
+  const fs::path package = buildPackage("beam_rows", frameLineOfBeams(), false, {}, 2);
   // Slanted across the pixel rows: a band under a pixel wide lit where it crosses their centres.
   const Camera far_away = lookingAt({-10.0, -80.0, 28.8}, {16.0, 0.0, 2.0});
   const Frame rows = render(package, far_away, ParametricMode::Tessellated, OcclusionMode::Off,
@@ -490,13 +495,7 @@ TEST_F(ParametricRendering, RowsOfThinBeamsDrawAsOneBand) {
 // too, by the frustum and behind a wall by the pyramid, as without rows (a row tested as one box
 // would draw every beam whenever any part of it shows).
 TEST_F(ParametricRendering, RowsDrawnBeamByBeamAreCulledBeamByBeam) {
-  const std::vector<glm::vec2> beam = smallIBeam();
-  std::vector<Part> parts;
-  for (int k = 0; k < 4; ++k) {
-    Transform t = placed({8.0 * k, 0.0, 0.0});
-    t.linear = glm::mat3(glm::vec3(0, 1, 0), glm::vec3(0, 0, 1), glm::vec3(1, 0, 0));
-    parts.push_back({uint32_t(1 + k), Extrusion{beam, 8.0f}, t, 0xff000000u | (0x2f4b1du * uint32_t(1 + k))});
-  }
+  std::vector<Part> parts = frameLineOfBeams();
   // A wall before the first two beams, seen from (16, -20, 1).
   parts.push_back({5u, Box{glm::vec3(8.5f, 0.1f, 3.0f)}, placed({8.0, -5.0, 0.0}), 0xff808080u});
   // One cluster holds them all: its box shows, so each beam must be tested on its own.
