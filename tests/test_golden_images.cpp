@@ -1,0 +1,181 @@
+// Golden images: small packages rendered headless (EGL, llvmpipe) in the default mode and
+// compared with the colour and object-id images stored in data/golden/, within the tolerance of
+// `terawalk compare` (a pixel matches when one within a pixel of it matches, by colour within 24
+// levels a channel and by object id). A change to what the runtime draws, from the LOD cut to
+// the shading, the culling or the parametric forms, fails here until the images are looked at
+// and stored again: TERAWALK_UPDATE_GOLDEN=1 writes them to data/golden/ instead of comparing.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "camera_test_support.h"
+#include "egl_context.h"
+#include "frame_loop.h"
+#include "image_compare.h"
+#include "plant_generator.h"
+#include "preprocess_driver.h"
+#include "test_support.h"
+#include "tws_writer.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr int kWidth = 320, kHeight = 240;
+// At least this share of the pixels must match; the rest is room for pixels that a driver rounds
+// differently, not for a changed picture (the deck view drawn at tau 3 px instead of 1 matches
+// 98.1 % and fails).
+constexpr double kMinMatchShare = 0.995;
+
+bool updating() {
+  const char* update = std::getenv("TERAWALK_UPDATE_GOLDEN");
+  return update && std::string(update) == "1";
+}
+
+fs::path goldenDir() { return test::dataDir() / "golden"; }
+
+fs::path bunnyPackage() {
+  static const fs::path path = [] {
+    const fs::path out = test::processScratchDir("golden") / "bunny.twk";
+    PreprocessOptions options;
+    options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
+    options.output = out;
+    runPreprocess(options);
+    return out;
+  }();
+  return path;
+}
+
+// A one-module plant of about 200,000 equivalent triangles: meshes, parametrics (tubes, boxes,
+// beams, elbows) and a NURBS hull, as the generator makes them for the large plants.
+fs::path plantPackage() {
+  static const fs::path path = [] {
+    const fs::path dir = test::processScratchDir("golden");
+    const fs::path scene = dir / "plant.tws";
+    {
+      TwsWriter writer(scene);
+      PlantOptions plant;
+      plant.target_triangles = 200'000;
+      plant.seed = 1;
+      generatePlant(plant, writer, nullptr, nullptr);
+      writer.finish();
+    }
+    PreprocessOptions options;
+    options.inputs = {scene};
+    options.output = dir / "plant.twk";
+    runPreprocess(options);
+    return options.output;
+  }();
+  return path;
+}
+
+struct Frame {
+  std::vector<uint8_t> rgba;
+  std::vector<uint32_t> ids;
+};
+
+// Renders `camera` in the default mode until the cut is complete and steady (no ancestor stands
+// in, nothing is requested, three frames in a row), then reads the colour and the ids.
+Frame renderSettled(const fs::path& package, const Camera& camera) {
+  WalkthroughOptions options;
+  options.width = kWidth;
+  options.height = kHeight;
+  options.prefetch = false;
+  Walkthrough walk(package, options);
+  int steady = 0;
+  for (int i = 0; i < 200 && steady < 3; ++i) {
+    const FrameStats stats = walk.renderFrame(camera, 0.0);
+    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
+  }
+  EXPECT_EQ(steady, 3) << "the cut did not settle";
+  Frame frame;
+  walk.renderer().readColor(frame.rgba);
+  walk.renderer().readObjectIds(frame.ids);
+  return frame;
+}
+
+// Compares `frame` with data/golden/NAME.png and NAME-ids.png (or stores it there when
+// updating). On a mismatch the frame and the difference image are left in the test's scratch
+// directory.
+void expectMatchesGolden(const Frame& frame, const std::string& name) {
+  const fs::path colour_path = goldenDir() / (name + ".png");
+  const fs::path ids_path = goldenDir() / (name + "-ids.png");
+  if (updating()) {
+    fs::create_directories(goldenDir());
+    writePngRgba(colour_path, kWidth, kHeight, frame.rgba);
+    writePngRgba(ids_path, kWidth, kHeight, idsToRgba(frame.ids));
+    GTEST_SKIP() << "stored " << colour_path << " and " << ids_path;
+  }
+  const RgbaImage colour = readPngRgba(colour_path);
+  const RgbaImage ids = readPngRgba(ids_path);
+  ASSERT_EQ(colour.width, kWidth);
+  ASSERT_EQ(colour.height, kHeight);
+  ASSERT_EQ(ids.width, kWidth);
+  ASSERT_EQ(ids.height, kHeight);
+  const std::vector<uint32_t> golden_ids = idsFromRgba(ids.rgba);
+  std::vector<uint8_t> diff;
+  const ImageCompareResult result = compareImages(kWidth, kHeight, colour.rgba, frame.rgba,
+                                                  golden_ids, frame.ids, {}, &diff);
+  // The picture shows something: a blank frame against a blank golden proves nothing.
+  size_t covered = 0;
+  for (uint32_t id : golden_ids) covered += id != 0;
+  EXPECT_GT(covered, size_t(kWidth * kHeight / 10)) << name << ": the golden image is mostly empty";
+  if (result.match_share < kMinMatchShare) {
+    const fs::path dir = test::scratchDir();
+    writePngRgba(dir / (name + ".png"), kWidth, kHeight, frame.rgba);
+    writePngRgba(dir / (name + "-ids.png"), kWidth, kHeight, idsToRgba(frame.ids));
+    writePngRgba(dir / (name + "-diff.png"), kWidth, kHeight, diff);
+    ADD_FAILURE() << name << ": " << 100.0 * result.match_share << " % of the pixels match "
+                  << colour_path << " (at least " << 100.0 * kMinMatchShare
+                  << " % wanted; colour mismatch " << 100.0 * result.colour_mismatch_share
+                  << " %, id mismatch " << 100.0 * result.id_mismatch_share
+                  << " %); this frame and the difference are in " << dir;
+  }
+}
+
+// A walkthrough opened only for the model's bounds.
+WalkthroughOptions smallWindow() {
+  WalkthroughOptions options;
+  options.width = kWidth;
+  options.height = kHeight;
+  return options;
+}
+
+class GoldenImages : public ::testing::Test {
+ protected:
+  EglContext context_;
+};
+
+TEST_F(GoldenImages, Bunny) {
+  const fs::path package = bunnyPackage();
+  Walkthrough probe(package, smallWindow());
+  const glm::dvec3 centre = 0.5 * (probe.worldMin() + probe.worldMax());
+  const double size = glm::length(probe.worldMax() - probe.worldMin());
+  const Camera camera =
+      test::lookingAt(centre + glm::dvec3(0.3 * size, 0.2 * size, 1.0 * size), centre);
+  expectMatchesGolden(renderSettled(package, camera), "bunny");
+}
+
+TEST_F(GoldenImages, PlantFromOutside) {
+  const fs::path package = plantPackage();
+  Walkthrough probe(package, smallWindow());
+  const glm::dvec3 lo = probe.worldMin(), hi = probe.worldMax();
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double size = glm::length(hi - lo);
+  const Camera camera =
+      test::lookingAt(centre + glm::dvec3(-0.3 * size, -0.5 * size, 0.3 * size), centre);
+  expectMatchesGolden(renderSettled(package, camera), "plant-outside");
+}
+
+TEST_F(GoldenImages, PlantFromInsideADeck) {
+  const fs::path package = plantPackage();
+  // Within the module's second storey (its deck at 12 m; the module spans x 40 to 72 m and lies
+  // on the port side of the corridor), looking along it.
+  const Camera camera = test::lookingAt({43.0, -16.0, 13.7}, {68.0, -11.0, 13.0});
+  expectMatchesGolden(renderSettled(package, camera), "plant-inside");
+}
+
+}  // namespace
+}  // namespace tw
