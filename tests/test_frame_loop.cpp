@@ -7,6 +7,7 @@
 #include <chrono>
 #include <thread>
 
+#include "bunny_package_support.h"
 #include "camera_test_support.h"
 #include "camera_path.h"
 #include "egl_context.h"
@@ -21,17 +22,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-fs::path bunnyPackage() {
-  static const fs::path path = [] {
-    fs::path out = test::processScratchDir("frame_loop_bunny") / "bunny.twk";
-    PreprocessOptions options;
-    options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
-    options.output = out;
-    runPreprocess(options);
-    return out;
-  }();
-  return path;
-}
+using test::bunnyPackage;
 
 // The bunny with every mesh cluster in a page of its own (it packs into 5 pages otherwise), for
 // paging tests that need residency to follow the cut closely.

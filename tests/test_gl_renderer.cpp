@@ -17,13 +17,13 @@
 #include <GL/glcorearb.h>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "bunny_package_support.h"
 #include "egl_context.h"
 #include "geometry_pool.h"
 #include "gl_renderer.h"
 #include "image_compare.h"
 #include "package_view.h"
 #include "pager.h"
-#include "preprocess_driver.h"
 #include "test_support.h"
 #include "vertex_object_tags.h"
 
@@ -624,17 +624,7 @@ TEST_F(GlRendererTest, TriangleObjectsBeyondTheShaderStorageBlockLimit) {
 
 // --- A real package: the Stanford bunny, preprocessed once for this program. ---
 
-const fs::path& bunnyPackage() {
-  static const fs::path path = [] {
-    fs::path dir = test::processScratchDir("gl_renderer_bunny");
-    PreprocessOptions options;
-    options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
-    options.output = dir / "bunny.twk";
-    runPreprocess(options);
-    return options.output;
-  }();
-  return path;
-}
+using test::bunnyPackage;
 
 // Every level-0 mesh cluster decoded by hand into one page-like upload, as the pager does.
 struct LevelZero {

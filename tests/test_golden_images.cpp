@@ -9,6 +9,7 @@
 #include <cstdlib>
 #include <string>
 
+#include "bunny_package_support.h"
 #include "camera_test_support.h"
 #include "egl_context.h"
 #include "frame_loop.h"
@@ -36,17 +37,7 @@ bool updating() {
 
 fs::path goldenDir() { return test::dataDir() / "golden"; }
 
-fs::path bunnyPackage() {
-  static const fs::path path = [] {
-    const fs::path out = test::processScratchDir("golden") / "bunny.twk";
-    PreprocessOptions options;
-    options.inputs = {test::sharedDataDir() / "stanford-bunny.obj"};
-    options.output = out;
-    runPreprocess(options);
-    return out;
-  }();
-  return path;
-}
+using test::bunnyPackage;
 
 // A one-module plant of about 200,000 equivalent triangles: meshes, parametrics (tubes, boxes,
 // beams, elbows) and a NURBS hull, as the generator makes them for the large plants.
