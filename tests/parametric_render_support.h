@@ -192,6 +192,13 @@ inline Transform placed(const glm::dvec3& origin, const glm::vec3& axis_deg = gl
   return t;
 }
 
+// An I-beam profile 0.3 m deep and 0.15 m wide, 10 mm flanges, 10 mm web, counter-clockwise.
+inline std::vector<glm::vec2> smallIBeam() {
+  return {{-0.075f, -0.15f}, {0.075f, -0.15f}, {0.075f, -0.14f}, {0.005f, -0.14f},
+          {0.005f, 0.14f},   {0.075f, 0.14f},  {0.075f, 0.15f},  {-0.075f, 0.15f},
+          {-0.075f, 0.14f},  {-0.005f, 0.14f}, {-0.005f, -0.14f}, {-0.075f, -0.14f}};
+}
+
 class ParametricRendering : public ::testing::Test {
  protected:
   EglContext context_;
