@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <functional>
 #include <string>
 
 #include "bunny_package_support.h"
@@ -67,14 +68,17 @@ struct Frame {
   std::vector<uint32_t> ids;
 };
 
-// Renders `camera` in the default mode until the cut is complete and steady (no ancestor stands
-// in, nothing is requested, three frames in a row), then reads the colour and the ids.
-Frame renderSettled(const fs::path& package, const Camera& camera) {
+// Renders in the default mode, from the camera `aim` gives for the opened model, until the cut
+// is complete and steady (no ancestor stands in, nothing is requested, three frames in a row),
+// then reads the colour and the ids.
+Frame renderSettled(const fs::path& package,
+                    const std::function<Camera(const Walkthrough&)>& aim) {
   WalkthroughOptions options;
   options.width = kWidth;
   options.height = kHeight;
   options.prefetch = false;
   Walkthrough walk(package, options);
+  const Camera camera = aim(walk);
   int steady = 0;
   for (int i = 0; i < 200 && steady < 3; ++i) {
     const FrameStats stats = walk.renderFrame(camera, 0.0);
@@ -126,12 +130,13 @@ void expectMatchesGolden(const Frame& frame, const std::string& name) {
   }
 }
 
-// A walkthrough opened only for the model's bounds.
-WalkthroughOptions smallWindow() {
-  WalkthroughOptions options;
-  options.width = kWidth;
-  options.height = kHeight;
-  return options;
+// Looking at the model's centre from `offset` (in model diagonals) away from it.
+std::function<Camera(const Walkthrough&)> fromOutside(const glm::dvec3& offset) {
+  return [offset](const Walkthrough& walk) {
+    const glm::dvec3 centre = 0.5 * (walk.worldMin() + walk.worldMax());
+    const double size = glm::length(walk.worldMax() - walk.worldMin());
+    return test::lookingAt(centre + size * offset, centre);
+  };
 }
 
 class GoldenImages : public ::testing::Test {
@@ -140,32 +145,20 @@ class GoldenImages : public ::testing::Test {
 };
 
 TEST_F(GoldenImages, Bunny) {
-  const fs::path package = bunnyPackage();
-  Walkthrough probe(package, smallWindow());
-  const glm::dvec3 centre = 0.5 * (probe.worldMin() + probe.worldMax());
-  const double size = glm::length(probe.worldMax() - probe.worldMin());
-  const Camera camera =
-      test::lookingAt(centre + glm::dvec3(0.3 * size, 0.2 * size, 1.0 * size), centre);
-  expectMatchesGolden(renderSettled(package, camera), "bunny");
+  expectMatchesGolden(renderSettled(bunnyPackage(), fromOutside({0.3, 0.2, 1.0})), "bunny");
 }
 
 TEST_F(GoldenImages, PlantFromOutside) {
-  const fs::path package = plantPackage();
-  Walkthrough probe(package, smallWindow());
-  const glm::dvec3 lo = probe.worldMin(), hi = probe.worldMax();
-  const glm::dvec3 centre = 0.5 * (lo + hi);
-  const double size = glm::length(hi - lo);
-  const Camera camera =
-      test::lookingAt(centre + glm::dvec3(-0.3 * size, -0.5 * size, 0.3 * size), centre);
-  expectMatchesGolden(renderSettled(package, camera), "plant-outside");
+  expectMatchesGolden(renderSettled(plantPackage(), fromOutside({-0.3, -0.5, 0.3})),
+                      "plant-outside");
 }
 
 TEST_F(GoldenImages, PlantFromInsideADeck) {
-  const fs::path package = plantPackage();
   // Within the module's second storey (its deck at 12 m; the module spans x 40 to 72 m and lies
   // on the port side of the corridor), looking along it.
   const Camera camera = test::lookingAt({43.0, -16.0, 13.7}, {68.0, -11.0, 13.0});
-  expectMatchesGolden(renderSettled(package, camera), "plant-inside");
+  expectMatchesGolden(renderSettled(plantPackage(), [&](const Walkthrough&) { return camera; }),
+                      "plant-inside");
 }
 
 }  // namespace
