@@ -1,8 +1,0 @@
-set terminal pngcairo size 900,520 noenhanced
-set output '/work/scratch/bench-s11-5m-50m/plots/frametime-decks.png'
-set grid
-set key outside
-set title 'frame time along decks, plant 50M'
-set xlabel 'frame'
-set ylabel 'ms'
-plot '/work/scratch/bench-s11-5m-50m/plots/frametime-decks-reference.dat' with lines title 'reference (brute force)', '/work/scratch/bench-s11-5m-50m/plots/frametime-decks-lod.dat' with lines title 'LOD only', '/work/scratch/bench-s11-5m-50m/plots/frametime-decks-lod_frustum.dat' with lines title 'LOD + frustum', '/work/scratch/bench-s11-5m-50m/plots/frametime-decks-lod_frustum_occlusion.dat' with lines title 'LOD + frustum + occlusion', '/work/scratch/bench-s11-5m-50m/plots/frametime-decks-default.dat' with lines title 'full default'

@@ -1,9 +1,0 @@
-set terminal pngcairo size 900,520 noenhanced
-set output '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit.png'
-set grid
-set key outside
-set title 'median frame time against model size, orbit'
-set logscale x
-set xlabel 'input triangles'
-set ylabel 'ms'
-plot '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit-reference.dat' with linespoints title 'reference (brute force)', '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit-lod.dat' with linespoints title 'LOD only', '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit-lod_frustum.dat' with linespoints title 'LOD + frustum', '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit-lod_frustum_occlusion.dat' with linespoints title 'LOD + frustum + occlusion', '/work/scratch/bench-5M-50M-rows/plots/scaling-orbit-default.dat' with linespoints title 'full default'
