@@ -1,5 +1,5 @@
 // Tessellation rate of NURBS patch sets: the conforming shared-border algorithm
-// (preprocess/nurbs_conforming.h) against today's per-patch tessellateNurbs (formats/), on the
+// (formats/nurbs_conforming.h) against today's per-patch tessellateNurbs (formats/), on the
 // generator's hull and on a 2 x 2 layout, plus the OpenMesh check of the result.
 //
 // The hull comes from a generated scene named by the environment variable TW_HULL_TWS (for

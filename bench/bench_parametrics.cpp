@@ -28,7 +28,7 @@
 #include "egl_context.h"
 #include "gl_renderer.h"
 #include "package_view.h"
-#include "parametric_renderer.h"
+#include "parametrics/parametric_renderer.h"
 #include "preprocess_driver.h"
 #include "tws_writer.h"
 

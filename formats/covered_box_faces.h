@@ -14,7 +14,7 @@
 // Positions are the package frame's (InstanceRecord::origin), where neighbouring boxes' faces
 // agree to float rounding.
 // Who runs it: the preprocessor, once, storing the faces as instance flags
-// (pkg::kInstanceCoveredFaces; preprocess/instance_flag_marking.h); `terawalk verify` again, to
+// (pkg::kInstanceCoveredFaces; preprocess/parametrics/instance_flag_marking.h); `terawalk verify` again, to
 // check them.
 #pragma once
 

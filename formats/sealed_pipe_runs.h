@@ -20,7 +20,7 @@
 // Positions are the package frame's (InstanceRecord::origin), where one run's coordinates agree
 // to float rounding.
 // Who runs it: the preprocessor, once, storing the roles as instance flags
-// (preprocess/instance_flag_marking.h); the runtime only for packages without them.
+// (preprocess/parametrics/instance_flag_marking.h); the runtime only for packages without them.
 #pragma once
 
 #include <cstdint>

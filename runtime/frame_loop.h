@@ -26,7 +26,7 @@
 #include "occlusion_culler.h"
 #include "package_view.h"
 #include "pager.h"
-#include "parametric_renderer.h"
+#include "parametrics/parametric_renderer.h"
 
 namespace tw {
 

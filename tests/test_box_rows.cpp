@@ -12,7 +12,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "box_rows.h"
+#include "parametrics/box_rows.h"
 #include "covered_box_faces.h"
 
 namespace tw {

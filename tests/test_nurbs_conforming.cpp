@@ -1,4 +1,4 @@
-// Tests of the conforming NURBS tessellation (preprocess/nurbs_conforming.h) and of its OpenMesh
+// Tests of the conforming NURBS tessellation (formats/nurbs_conforming.h) and of its OpenMesh
 // verification (preprocess/patch_mesh_check.h): layouts with adjacent patches parameterised
 // differently (reversed, other degree, other knots), corners of 3 and 4 patches, a closed
 // cylinder and the generator's hull. Each must verify with zero T-vertices and zero inner

@@ -22,7 +22,7 @@
 #include "package_view.h"
 #include "position_key.h"
 #include "package_writer.h"
-#include "parametric_clusters.h"
+#include "parametrics/parametric_clusters.h"
 #include "quantization_snap.h"
 #include "test_support.h"
 

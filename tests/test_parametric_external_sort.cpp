@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "covered_box_faces.h"
-#include "parametric_external_sort.h"
+#include "parametrics/parametric_external_sort.h"
 #include "test_support.h"
 
 namespace {

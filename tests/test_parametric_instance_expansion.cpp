@@ -3,7 +3,7 @@
 
 #include <vector>
 
-#include "parametric_instance_expansion.h"
+#include "parametrics/parametric_instance_expansion.h"
 
 namespace tw {
 namespace {

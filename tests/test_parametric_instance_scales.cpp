@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "package_format.h"
-#include "parametric_instance_forms.h"
-#include "parametric_instance_scales.h"
+#include "parametrics/parametric_instance_forms.h"
+#include "parametrics/parametric_instance_scales.h"
 
 namespace tw {
 namespace {

@@ -9,7 +9,7 @@
 #include <numbers>
 
 #include "camera_path.h"
-#include "parametric_gpu.h"
+#include "parametrics/parametric_gpu.h"
 #include "parametric_render_support.h"
 
 namespace tw {

@@ -17,9 +17,9 @@
 #include "package_view.h"
 #include "package_summary.h"
 #include "package_writer.h"
-#include "parametric_clusters.h"
+#include "parametrics/parametric_clusters.h"
 #include "parametric_render_support.h"
-#include "parametric_renderer.h"
+#include "parametrics/parametric_renderer.h"
 
 namespace tw {
 namespace {

@@ -1,4 +1,4 @@
-// ProfileSimplifier (runtime/profile_simplifier.h): open and closed profiles lose only the points
+// ProfileSimplifier (runtime/parametrics/profile_simplifier.h): open and closed profiles lose only the points
 // within the tolerance of what they keep, the kept points are a subset in order, and nothing is
 // lost at a tolerance below the profile's detail.
 #include <gtest/gtest.h>
@@ -8,7 +8,7 @@
 
 #include <glm/geometric.hpp>
 
-#include "profile_simplifier.h"
+#include "parametrics/profile_simplifier.h"
 
 namespace tw {
 namespace {

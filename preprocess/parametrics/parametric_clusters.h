@@ -57,7 +57,7 @@ uint64_t parametricMortonCode(const glm::vec3& unit);
 // of its canonical box's sizes (primitiveBounds, formats/bounds.h), the columns' lengths applied
 // (a tube's, cone's or sphere's diameter, a revolution's), and for an elbow its tube's. From far
 // away the runtime first shows an instance when this width reaches a fraction of a pixel
-// (shownScales in runtime/parametric_instance_forms.h), so within a cluster the instances go
+// (shownScales in runtime/parametrics/parametric_instance_forms.h), so within a cluster the instances go
 // widest first: what a far view draws of a cluster is at its front, and a far view reads few
 // cache lines of it. 0 where the parameters give no number.
 float parametricShowWidth(const Primitive& primitive, const Transform& transform);

@@ -520,8 +520,8 @@ struct ParametricInstanceMeshes::Impl {
       }
       const GLenum mode = batch == kPoints ? GL_POINTS : GL_TRIANGLES;
       // The 50M plant's orbit (121,516 triangles a frame) fell from 47.6 to 39.5 ms when its
-      // batch went in flushed parts (docs/benchmarks.md, "A far view's parametric batch in
-      // flushed parts").
+      // batch went in flushed parts (commit 080f873); near views' batches go whole
+      // (docs/design-notes.md, "Every batch in flushed parts").
       const size_t vertices_per_primitive = mode == GL_TRIANGLES ? 3 : 1;
       const size_t most = in_parts ? size_t(primitives_per_flush) * vertices_per_primitive : count;
       for (size_t at = 0; at < count; at += most) {
