@@ -140,8 +140,26 @@ glm::dvec3 PackageView::origin() const {
   return glm::dvec3(header_->origin[0], header_->origin[1], header_->origin[2]);
 }
 
+// Open-time validation, in the order each step needs the one before: the header and section
+// table, the sections' checksums, the compressed tables, then every record and reference.
 void PackageView::validate(Verify verify) {
   header_ = reinterpret_cast<const PackageHeader*>(data_);
+  validateHeader();
+  validateSectionTable();
+  verifySectionChecksums(verify);
+  decompressSections();
+  mapSections();
+  validateNamedRecords();
+  validateInstances();
+  validatePages();
+  validateGroups();
+  validateClusters();
+  validateVisibility();
+  if (verify == Verify::All) verifyAll();
+}
+
+// Identity, record sizes, the section table's extent and checksum, and the header's values.
+void PackageView::validateHeader() {
   const PackageHeader& h = *header_;
   auto at = [&](const void* field) { return fieldOffset(h, field); };
 
@@ -181,9 +199,7 @@ void PackageView::validate(Verify verify) {
   if ((h.flags & ~kKnownHeaderFlags) != 0) fail(at(&h.flags), "unknown header flags");
   if (h.section_count < kSectionCount || h.section_count > 4096)
     fail(at(&h.section_count), "section count " + str(h.section_count) + " is out of range");
-  const uint64_t table_end =
-      sizeof(PackageHeader) + uint64_t{h.section_count} * sizeof(SectionEntry);
-  if (table_end > size_) fail(size_, "section table runs past the end of the file");
+  if (sectionTableEnd() > size_) fail(size_, "section table runs past the end of the file");
   sections_.resize(h.section_count);
   std::memcpy(sections_.data(), data_ + sizeof(PackageHeader),
               sections_.size() * sizeof(SectionEntry));
@@ -201,8 +217,16 @@ void PackageView::validate(Verify verify) {
     fail(at(&h.position_step_m), "position step is outside [1e-9, 1] m");
   if (!allFinite(h.bounds_min, 3) || !allFinite(h.bounds_max, 3))
     fail(at(&h.bounds_min), "bounds are not finite");
+}
 
-  // Section table.
+uint64_t PackageView::sectionTableEnd() const {
+  return sizeof(PackageHeader) + uint64_t{header_->section_count} * sizeof(SectionEntry);
+}
+
+// Every entry's type, record size, alignment, extent and count; no two sections overlap.
+void PackageView::validateSectionTable() {
+  const PackageHeader& h = *header_;
+  const uint64_t table_end = sectionTableEnd();
   for (uint32_t i = 0; i < h.section_count; ++i) {
     const SectionEntry& e = sections_[i];
     const uint64_t entry_at = sizeof(PackageHeader) + uint64_t{i} * sizeof(SectionEntry);
@@ -243,25 +267,34 @@ void PackageView::validate(Verify verify) {
         fail(cur.offset, "section " + str(order[k]) + " overlaps section " + str(order[k - 1]));
     }
   }
-  auto storedOf = [&](uint32_t i) {
-    return std::span<const uint8_t>(data_ + sections_[i].offset, storedBytes(sections_[i]));
-  };
+}
+
+std::span<const uint8_t> PackageView::storedSection(uint32_t i) const {
+  return std::span<const uint8_t>(data_ + sections_[i].offset, storedBytes(sections_[i]));
+}
+
+// The page data and unknown sections are checked only by a full verification (docs/verify.md).
+void PackageView::verifySectionChecksums(Verify verify) const {
+  const PackageHeader& h = *header_;
   for (uint32_t i = 0; i < h.section_count; ++i) {
     if (i == static_cast<uint32_t>(SectionType::PageData) && verify != Verify::All) continue;
     if (i >= kSectionCount && verify != Verify::All) continue;
     const SectionEntry& e = sections_[i];
-    if (packageSectionChecksum(storedOf(i)) != e.checksum)
+    if (packageSectionChecksum(storedSection(i)) != e.checksum)
       fail(e.offset, (i < kSectionCount ? std::string(kSectionNames[i]) : "section " + str(i)) +
                          " section checksum mismatch");
   }
-  // Compressed tables, once their frames passed the checksum: each on a thread of its own (the
-  // instance and object tables of a large model are tens of MB each, and this is start-up), the
-  // first problem in table order reported.
+}
+
+// Compressed tables, once their frames passed the checksum: each on a thread of its own (the
+// instance and object tables of a large model are tens of MB each, and this is start-up), the
+// first problem in table order reported.
+void PackageView::decompressSections() {
   decompressed_.assign(kSectionCount, {});
   std::vector<std::future<std::string>> problems(kSectionCount);
   for (uint32_t i = 0; i < kSectionCount; ++i)
     if (sections_[i].stored_bytes != 0)
-      problems[i] = std::async(std::launch::async, [this, i, frame = storedOf(i)] {
+      problems[i] = std::async(std::launch::async, [this, i, frame = storedSection(i)] {
         return decompressSection(frame, sections_[i].bytes, decompressed_[i]);
       });
   std::vector<std::string> results(kSectionCount);
@@ -270,15 +303,19 @@ void PackageView::validate(Verify verify) {
   for (uint32_t i = 0; i < kSectionCount; ++i)
     if (!results[i].empty())
       fail(sections_[i].offset, std::string(kSectionNames[i]) + " section " + results[i]);
-  auto bytesOf = [&](SectionType type) {
-    const uint32_t i = static_cast<uint32_t>(type);
-    if (sections_[i].stored_bytes != 0) return std::span<const uint8_t>(decompressed_[i]);
-    return std::span<const uint8_t>(data_ + sections_[i].offset, sections_[i].bytes);
-  };
+}
 
+std::span<const uint8_t> PackageView::sectionBytes(SectionType type) const {
+  const uint32_t i = static_cast<uint32_t>(type);
+  if (sections_[i].stored_bytes != 0) return std::span<const uint8_t>(decompressed_[i]);
+  return std::span<const uint8_t>(data_ + sections_[i].offset, sections_[i].bytes);
+}
+
+// The record spans over the mapping (or the decompressed tables).
+void PackageView::mapSections() {
   auto records = [&]<typename T>(SectionType type, std::span<const T>& out) {
     const SectionEntry& e = sections_[static_cast<uint32_t>(type)];
-    out = std::span<const T>(reinterpret_cast<const T*>(bytesOf(type).data()), e.count);
+    out = std::span<const T>(reinterpret_cast<const T*>(sectionBytes(type).data()), e.count);
   };
   records(SectionType::Clusters, clusters_);
   records(SectionType::Groups, groups_);
@@ -287,12 +324,14 @@ void PackageView::validate(Verify verify) {
   records(SectionType::Profiles, profiles_);
   records(SectionType::Objects, objects_);
   records(SectionType::Layers, layers_);
-  auto strings = bytesOf(SectionType::Strings);
+  auto strings = sectionBytes(SectionType::Strings);
   strings_ = std::string_view(reinterpret_cast<const char*>(strings.data()), strings.size());
-  visibility_ = bytesOf(SectionType::Visibility);
-  page_data_ = bytesOf(SectionType::PageData);
+  visibility_ = sectionBytes(SectionType::Visibility);
+  page_data_ = sectionBytes(SectionType::PageData);
+}
 
-  // Records and references.
+// Layers and objects: names and keys inside the string pool, layers in range, known flags.
+void PackageView::validateNamedRecords() const {
   auto checkString = [&](const void* record, uint64_t offset, uint64_t bytes, const char* what) {
     if (bytes > kMaxStringBytes || !fits(offset, bytes, strings_.size()))
       fail(offsetOf(record), std::string(what) + " [" + str(offset) + ", +" + str(bytes) +
@@ -309,6 +348,11 @@ void PackageView::validate(Verify verify) {
     if (!allFinite(o.aabb_min, 3) || !allFinite(o.aabb_max, 3))
       fail(offsetOf(&o.aabb_min), "object bounds are not finite");
   }
+}
+
+// Profile points finite; instances of known types and flags, in range, with valid profiles.
+void PackageView::validateInstances() const {
+  const PackageHeader& h = *header_;
   for (const glm::vec2& p : profiles_)
     if (!finite(p.x) || !finite(p.y)) fail(offsetOf(&p), "profile point is not finite");
   for (const InstanceRecord& in : instances_) {
@@ -339,6 +383,9 @@ void PackageView::validate(Verify verify) {
         !fits(in.profile_first, in.profile_count, profiles_.size()))
       fail(offsetOf(&in.profile_first), "instance profile range is invalid");
   }
+}
+
+void PackageView::validatePages() const {
   for (const PageRecord& p : pages_) {
     if (p.codec > static_cast<uint32_t>(PageCodec::Zstd))
       fail(offsetOf(&p.codec), "unknown page codec");
@@ -350,6 +397,10 @@ void PackageView::validate(Verify verify) {
       fail(offsetOf(&p.offset), "page bytes [" + str(p.offset) + ", +" + str(p.stored_bytes) +
                                     ") are not inside the page data section");
   }
+}
+
+void PackageView::validateGroups() const {
+  const PackageHeader& h = *header_;
   for (const GroupRecord& g : groups_) {
     if (!fits(g.first_cluster, g.cluster_count, clusters_.size()))
       fail(offsetOf(&g.first_cluster), "group cluster range is invalid");
@@ -361,6 +412,12 @@ void PackageView::validate(Verify verify) {
     if (g.level >= h.level_count || g.reserved != 0)
       fail(offsetOf(&g.level), "group level or reserved field is invalid");
   }
+}
+
+// Bounds, errors monotone toward the roots, group links, object ranges, and each kind's own
+// fields: a mesh cluster's bytes inside its page, a parametric cluster's instances of one type.
+void PackageView::validateClusters() const {
+  const PackageHeader& h = *header_;
   for (size_t c = 0; c < clusters_.size(); ++c) {
     const ClusterRecord& r = clusters_[c];
     const uint64_t at_c = offsetOf(&r);
@@ -430,9 +487,6 @@ void PackageView::validate(Verify verify) {
       fail(at_c + 90, "cluster " + str(c) + " has unknown kind " + str(r.kind));
     }
   }
-
-  validateVisibility();
-  if (verify == Verify::All) verifyAll();
 }
 
 void PackageView::validateVisibility() {

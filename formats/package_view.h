@@ -96,6 +96,19 @@ class PackageView {
  private:
   PackageView() = default;
   void validate(Verify verify);
+  void validateHeader();
+  void validateSectionTable();
+  void verifySectionChecksums(Verify verify) const;
+  void decompressSections();
+  void mapSections();
+  void validateNamedRecords() const;
+  void validateInstances() const;
+  void validatePages() const;
+  void validateGroups() const;
+  void validateClusters() const;
+  uint64_t sectionTableEnd() const;
+  std::span<const uint8_t> storedSection(uint32_t index) const;  // as stored (maybe compressed)
+  std::span<const uint8_t> sectionBytes(pkg::SectionType type) const;  // as read
   void verifyAll();
   void validateVisibility();
   [[noreturn]] void fail(uint64_t offset, const std::string& reason) const;

@@ -397,21 +397,23 @@ float predictFarProxyVoxel(double source_area, uint32_t target_triangles, float 
   return std::clamp(voxel, min_voxel, std::max(extent, min_voxel));
 }
 
-FarProxy buildFarProxy(const FarProxyInput& input, const FarProxyOptions& options) {
-  if (input.indices.size() % 3 != 0)
-    throw std::invalid_argument("buildFarProxy: index count is not a multiple of 3");
-  if (input.triangle_object_ids.size() != input.indices.size() / 3)
-    throw std::invalid_argument("buildFarProxy: need one object id per triangle");
-  for (uint32_t v : input.indices)
-    if (v >= input.positions.size())
-      throw std::invalid_argument("buildFarProxy: index out of range");
-
-  // The valid source triangles, over the input's positions (unused ones are harmless).
-  Soup source;
-  source.positions.assign(input.positions.begin(), input.positions.end());
-  std::vector<uint32_t> source_ids;
-  glm::vec3 lo(INFINITY), hi(-INFINITY);
+// The input's valid triangles (no repeated corner, every coordinate finite) over its positions
+// (unused ones are harmless), with their object ids, bounds and area.
+struct FarProxySource {
+  Soup soup;
+  std::vector<uint32_t> ids;  // one per triangle of `soup`
+  glm::vec3 lo{INFINITY}, hi{-INFINITY};
   double area = 0.0;
+};
+
+FarProxySource validSource(const FarProxyInput& input) {
+  FarProxySource out;
+  Soup& source = out.soup;
+  std::vector<uint32_t>& source_ids = out.ids;
+  glm::vec3& lo = out.lo;
+  glm::vec3& hi = out.hi;
+  double& area = out.area;
+  source.positions.assign(input.positions.begin(), input.positions.end());
   for (size_t t = 0; t < input.triangle_object_ids.size(); ++t) {
     const uint32_t a = input.indices[3 * t], b = input.indices[3 * t + 1],
                    c = input.indices[3 * t + 2];
@@ -428,24 +430,31 @@ FarProxy buildFarProxy(const FarProxyInput& input, const FarProxyOptions& option
     area += 0.5 * double(glm::length(glm::cross(input.positions[b] - input.positions[a],
                                                 input.positions[c] - input.positions[a])));
   }
-  FarProxy proxy;
-  if (source.tris.empty()) return proxy;
-  const float extent = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
-  if (!(extent > 0.0f)) return proxy;
-  initializeOpenVdb();
+  return out;
+}
 
-  // Voxel search: the predicted size first, then a rescale by the square root of the miss.
-  // Small parts become blobs whose count no longer falls with h, and counts jump where
-  // neighbouring shells merge, hence few tries (each costs a mesh -> volume -> mesh round trip).
-  const glm::vec3 center = 0.5f * (lo + hi);
+// The remeshed shell the voxel-size search kept, with the distance field it came from.
+struct Remesh {
+  Soup raw;
+  DistanceField field;
+  float voxel = 0.0f;
+};
+
+// Voxel search: the predicted size first, then a rescale by the square root of the miss.
+// Small parts become blobs whose count no longer falls with h, and counts jump where
+// neighbouring shells merge, hence few tries (each costs a mesh -> volume -> mesh round trip).
+Remesh searchVoxelSize(const FarProxySource& in, const glm::vec3& center, float extent,
+                       const FarProxyOptions& options) {
+  const Soup& source = in.soup;
   const double target = std::max<double>(options.target_triangles, 1.0);
   const float min_voxel = extent * std::max(options.min_voxel_fraction, 1e-6f);
-  float voxel = predictFarProxyVoxel(area, options.target_triangles, extent, options);
+  float voxel = predictFarProxyVoxel(in.area, options.target_triangles, extent, options);
   // Once one voxel size fits and a finer one does not, bisect between them (geometrically):
   // rescaling alone can oscillate across a jump.
-  Soup best;
-  DistanceField best_field;
-  float best_voxel = 0.0f;
+  Remesh kept;
+  Soup& best = kept.raw;
+  DistanceField& best_field = kept.field;
+  float& best_voxel = kept.voxel;
   bool best_fits = false;
   float finest_fit = INFINITY, coarsest_over = 0.0f;
   for (uint32_t attempt = 0; attempt < std::max(options.max_attempts, 1u); ++attempt) {
@@ -477,35 +486,83 @@ FarProxy buildFarProxy(const FarProxyInput& input, const FarProxyOptions& option
     if (next == voxel) break;  // nothing else to try
     voxel = next;
   }
-  if (best.tris.empty()) return proxy;
-  Soup mesh = canonicalize(best, center);
-  const float h = best_voxel;
+  return kept;
+}
 
-  // Exact nearest-triangle searches for object ids, and for error samples where a field has
-  // nothing to say (outside its band).
-  std::unique_ptr<TriangleGrid> source_exact, proxy_exact;
-  auto exactSource = [&]() -> TriangleGrid& {
-    if (!source_exact) source_exact = std::make_unique<TriangleGrid>(source, h);
-    return *source_exact;
+// Source parts (connected by shared vertices) and their boxes, for part_error.
+struct SourceParts {
+  std::vector<uint32_t> part;  // per position: its part's root
+  std::vector<glm::vec3> part_lo, part_hi;
+};
+
+SourceParts sourceParts(const Soup& source) {
+  SourceParts out;
+  std::vector<uint32_t>& part = out.part;
+  part.resize(source.positions.size());
+  for (uint32_t v = 0; v < part.size(); ++v) part[v] = v;
+  auto find = [&](uint32_t v) {
+    while (part[v] != v) v = part[v] = part[part[v]];
+    return v;
   };
+  for (size_t i = 0; i < source.tris.size(); i += 3)
+    for (int k = 1; k < 3; ++k) {
+      const uint32_t a = find(source.tris[i]), b = find(source.tris[i + k]);
+      if (a != b) part[std::max(a, b)] = std::min(a, b);
+    }
+  for (uint32_t v = 0; v < part.size(); ++v) part[v] = find(v);
+  std::vector<glm::vec3>& part_lo = out.part_lo;
+  std::vector<glm::vec3>& part_hi = out.part_hi;
+  part_lo.assign(part.size(), glm::vec3(INFINITY));
+  part_hi.assign(part.size(), glm::vec3(-INFINITY));
+  for (uint32_t v : source.tris) {
+    part_lo[part[v]] = glm::min(part_lo[part[v]], source.positions[v]);
+    part_hi[part[v]] = glm::max(part_hi[part[v]], source.positions[v]);
+  }
+  return out;
+}
 
-  // Object ids: the source triangle nearest each proxy triangle's centroid, found exactly (the
-  // closest triangles OpenVDB records away from the surface are approximate, and picked another
-  // part for about 3% of the triangles of a dense aggregate). One query per proxy triangle.
-  proxy.triangle_object_ids.resize(mesh.tris.size() / 3);
-  for (size_t t = 0; t < proxy.triangle_object_ids.size(); ++t) {
+// Exact nearest-triangle searches over a surface, built on first use.
+class LazyTriangleGrid {
+ public:
+  LazyTriangleGrid(const Soup& surface, float cell) : surface_(surface), cell_(cell) {}
+  TriangleGrid& get() {
+    if (!grid_) grid_ = std::make_unique<TriangleGrid>(surface_, cell_);
+    return *grid_;
+  }
+
+ private:
+  const Soup& surface_;
+  float cell_;
+  std::unique_ptr<TriangleGrid> grid_;
+};
+
+// Object ids: the source triangle nearest each proxy triangle's centroid, found exactly (the
+// closest triangles OpenVDB records away from the surface are approximate, and picked another
+// part for about 3% of the triangles of a dense aggregate). One query per proxy triangle.
+std::vector<uint32_t> proxyObjectIds(const Soup& mesh, const std::vector<uint32_t>& source_ids,
+                                     LazyTriangleGrid& source_exact) {
+  std::vector<uint32_t> ids(mesh.tris.size() / 3);
+  for (size_t t = 0; t < ids.size(); ++t) {
     const glm::vec3 centroid =
         (mesh.positions[mesh.tris[3 * t]] + mesh.positions[mesh.tris[3 * t + 1]] +
          mesh.positions[mesh.tris[3 * t + 2]]) /
         3.0f;
-    proxy.triangle_object_ids[t] = source_ids[exactSource().nearest(centroid).first];
+    ids[t] = source_ids[source_exact.get().nearest(centroid).first];
   }
-  const openvdb::Int32Grid::ConstAccessor source_nearest = best_field.nearest->getConstAccessor();
+  return ids;
+}
 
-  // Error: sampled two-sided distance bound plus the sample spacing (see far_proxy.h). Each
-  // sample's distance to the other surface is bounded by its exact distance to the triangles
-  // recorded as closest at the eight voxels around it: the source's index grid for proxy
-  // samples, the proxy's own (one more, smaller, voxelization) for source samples.
+// Error: sampled two-sided distance bound plus the sample spacing (see far_proxy.h). Each
+// sample's distance to the other surface is bounded by its exact distance to the triangles
+// recorded as closest at the eight voxels around it: the source's index grid for proxy
+// samples, the proxy's own (one more, smaller, voxelization) for source samples.
+void measureFarProxyError(const FarProxySource& in, const Remesh& kept, const Soup& mesh,
+                          const glm::vec3& center, const FarProxyOptions& options,
+                          LazyTriangleGrid& source_exact, FarProxy& proxy) {
+  const Soup& source = in.soup;
+  const float h = kept.voxel;
+  const openvdb::Int32Grid::ConstAccessor source_nearest = kept.field.nearest->getConstAccessor();
+
   const float spacing = 0.5f * h;
   // The eight corners' triangles first, then the 4x4x4 block's (tighter: the recorded triangles
   // are approximate away from the surface), then an exact search outside the band.
@@ -519,49 +576,59 @@ FarProxy buildFarProxy(const FarProxyInput& input, const FarProxyOptions& option
   const auto [to_source, margin_p] =
       sampledDistance(mesh, spacing, [&](const glm::vec3& p, float floor) {
         return boundFrom(source_nearest, source, p, floor,
-                         [&](const glm::vec3& q) { return exactSource().nearest(q).second; });
+                         [&](const glm::vec3& q) { return source_exact.get().nearest(q).second; });
       });
   const DistanceField proxy_field = distanceField(mesh, center, h, options, true);
   const openvdb::Int32Grid::ConstAccessor proxy_nearest = proxy_field.nearest->getConstAccessor();
-  // Source parts (connected by shared vertices) and their sizes, for part_error.
-  std::vector<uint32_t> part(source.positions.size());
-  for (uint32_t v = 0; v < part.size(); ++v) part[v] = v;
-  auto find = [&](uint32_t v) {
-    while (part[v] != v) v = part[v] = part[part[v]];
-    return v;
-  };
-  for (size_t i = 0; i < source.tris.size(); i += 3)
-    for (int k = 1; k < 3; ++k) {
-      const uint32_t a = find(source.tris[i]), b = find(source.tris[i + k]);
-      if (a != b) part[std::max(a, b)] = std::min(a, b);
-    }
-  for (uint32_t v = 0; v < part.size(); ++v) part[v] = find(v);
-  std::vector<glm::vec3> part_lo(part.size(), glm::vec3(INFINITY)),
-      part_hi(part.size(), glm::vec3(-INFINITY));
-  for (uint32_t v : source.tris) {
-    part_lo[part[v]] = glm::min(part_lo[part[v]], source.positions[v]);
-    part_hi[part[v]] = glm::max(part_hi[part[v]], source.positions[v]);
-  }
+  const SourceParts parts = sourceParts(source);
+  const std::vector<uint32_t>& part = parts.part;
+  LazyTriangleGrid proxy_exact(mesh, h);
   std::vector<float> part_worst(part.size(), 0.0f);
   const auto [to_proxy, margin_s] = sampledDistance(
       source, spacing,
       [&](const glm::vec3& p, float floor) {
         // Hidden deep inside a merged shell: exact, against the (small) proxy.
         return boundFrom(proxy_nearest, mesh, p, floor, [&](const glm::vec3& q) {
-          if (!proxy_exact) proxy_exact = std::make_unique<TriangleGrid>(mesh, h);
-          return proxy_exact->nearest(q).second;
+          return proxy_exact.get().nearest(q).second;
         });
       },
       &part, &part_worst);
   proxy.error = std::max(to_source + margin_p, to_proxy + margin_s);
   proxy.part_error = to_source + margin_p;
-  for (uint32_t root = 0; root < part.size(); ++root)
-    if (part[root] == root && part_lo[root].x <= part_hi[root].x)
-      proxy.part_error = std::max(
-          proxy.part_error,
-          std::min(part_worst[root] + margin_s, glm::length(part_hi[root] - part_lo[root])));
-  proxy.voxel_size = h;
+  for (uint32_t root = 0; root < part.size(); ++root) {
+    const glm::vec3 lo = parts.part_lo[root], hi = parts.part_hi[root];
+    if (part[root] == root && lo.x <= hi.x)
+      proxy.part_error =
+          std::max(proxy.part_error, std::min(part_worst[root] + margin_s, glm::length(hi - lo)));
+  }
   proxy.sample_spacing = std::max(margin_p, margin_s);
+}
+
+FarProxy buildFarProxy(const FarProxyInput& input, const FarProxyOptions& options) {
+  if (input.indices.size() % 3 != 0)
+    throw std::invalid_argument("buildFarProxy: index count is not a multiple of 3");
+  if (input.triangle_object_ids.size() != input.indices.size() / 3)
+    throw std::invalid_argument("buildFarProxy: need one object id per triangle");
+  for (uint32_t v : input.indices)
+    if (v >= input.positions.size())
+      throw std::invalid_argument("buildFarProxy: index out of range");
+
+  const FarProxySource source = validSource(input);
+  FarProxy proxy;
+  if (source.soup.tris.empty()) return proxy;
+  const float extent = std::max({source.hi.x - source.lo.x, source.hi.y - source.lo.y,
+                                 source.hi.z - source.lo.z});
+  if (!(extent > 0.0f)) return proxy;
+  initializeOpenVdb();
+
+  const glm::vec3 center = 0.5f * (source.lo + source.hi);
+  const Remesh kept = searchVoxelSize(source, center, extent, options);
+  if (kept.raw.tris.empty()) return proxy;
+  Soup mesh = canonicalize(kept.raw, center);
+  LazyTriangleGrid source_exact(source.soup, kept.voxel);
+  proxy.triangle_object_ids = proxyObjectIds(mesh, source.ids, source_exact);
+  measureFarProxyError(source, kept, mesh, center, options, source_exact, proxy);
+  proxy.voxel_size = kept.voxel;
   proxy.positions = std::move(mesh.positions);
   proxy.indices = std::move(mesh.tris);
   return proxy;

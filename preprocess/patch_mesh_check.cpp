@@ -96,24 +96,14 @@ bool PatchMeshReport::ok() const {
   return refused_faces == 0 && inner_boundary_edges == 0 && t_vertices == 0 && inconsistent_orientation == 0;
 }
 
-PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& patches, float tolerance) {
-  PatchMeshReport report;
-  // Exact weld (exact_weld.h); the geometry below works in double.
-  const WeldedTriangles welded = weldExactly(mesh);
-  const std::vector<std::array<uint32_t, 3>>& triangles = welded.triangles;
-  const std::vector<glm::dvec3> points(welded.points.begin(), welded.points.end());
-  report.degenerate_faces = welded.skipped;
-  for (const auto& [a, b, c] : triangles)  // zero area, kept in the mesh
-    if (glm::length(glm::cross(points[b] - points[a], points[c] - points[a])) == 0.0)
-      ++report.degenerate_faces;
-  report.vertices = points.size();
+using Triangles = std::vector<std::array<uint32_t, 3>>;
+using Edges = std::vector<std::array<uint32_t, 2>>;
 
-  // Orientation: an edge shared by two faces must be used once in each direction.
-  for (const auto& [key, use] : countEdgeUses(triangles))
-    if (use.forward + use.backward == 2 && use.forward != 1) ++report.inconsistent_orientation;
-
-  // The half-edge mesh: OpenMesh refuses faces that would make an edge or a vertex non-manifold
-  // (an edge used twice in one direction among them).
+// The half-edge mesh: OpenMesh refuses faces that would make an edge or a vertex non-manifold
+// (an edge used twice in one direction among them). Counts the faces it takes and refuses;
+// returns the boundary edges of what it took.
+Edges halfEdgeBoundary(const std::vector<glm::dvec3>& points, const Triangles& triangles,
+                       PatchMeshReport& report) {
   QuietOpenMesh quiet;
   HalfEdgeMesh he;
   he.reserve(points.size(), points.size() + triangles.size(), triangles.size());
@@ -133,16 +123,18 @@ PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& pa
       boundary.push_back({static_cast<uint32_t>(he.from_vertex_handle(h).idx()),
                           static_cast<uint32_t>(he.to_vertex_handle(h).idx())});
     }
-  report.boundary_edges = boundary.size();
+  return boundary;
+}
 
-  // Distances: the given tolerance plus float rounding at the set's magnitude.
-  double magnitude = 0.0;
-  for (const glm::dvec3& p : points) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  double tol = static_cast<double>(std::max(tolerance, 0.0f)) + 1e-6 * magnitude;
-  if (!std::isfinite(tol)) tol = 0.0;
+// The patches' borders, sampled, and which of them are shared with another border.
+struct PatchBorders {
+  std::vector<BorderCurve> curves;
+  std::vector<char> shared;  // one per curve
+};
 
-  // Patch borders, and which of them are shared with another border.
-  std::vector<BorderCurve> borders;
+PatchBorders patchBorders(const NurbsPatchSet& patches, double tol) {
+  PatchBorders out;
+  std::vector<BorderCurve>& borders = out.curves;
   for (const NurbsPatch& patch : patches.patches) {
     if (!validateNurbsPatch(patch).empty()) continue;
     for (int side = 0; side < 4; ++side) {
@@ -158,7 +150,8 @@ PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& pa
       borders.push_back(c);
     }
   }
-  std::vector<char> shared(borders.size(), 0);
+  std::vector<char>& shared = out.shared;
+  shared.assign(borders.size(), 0);
   for (size_t a = 0; a < borders.size(); ++a) {
     if (shared[a]) continue;
     for (size_t b = 0; b < borders.size() && !shared[a]; ++b) {
@@ -169,7 +162,16 @@ PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& pa
     }
   }
 
-  // Boundary edges on the outer border: both ends on one unshared border.
+  return out;
+}
+
+// Boundary edges on the outer border have both ends on one unshared border; the others are
+// inside the set. Returns the middle of the first inside one.
+glm::dvec3 countInnerBoundaryEdges(const std::vector<glm::dvec3>& points, const Edges& boundary,
+                                   const PatchBorders& patch_borders, double tol,
+                                   PatchMeshReport& report) {
+  const std::vector<BorderCurve>& borders = patch_borders.curves;
+  const std::vector<char>& shared = patch_borders.shared;
   std::unordered_map<uint32_t, std::vector<uint32_t>> on_outer;  // boundary vertex -> unshared borders
   auto outerBorders = [&](uint32_t v) -> const std::vector<uint32_t>& {
     auto [it, inserted] = on_outer.try_emplace(v);
@@ -192,8 +194,14 @@ PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& pa
     }
   }
 
-  // T-vertices: boundary vertices strictly inside a boundary edge (grid of boundary vertices,
-  // cells the size of the mean boundary edge).
+  return first_inner;
+}
+
+// T-vertices: boundary vertices strictly inside a boundary edge (grid of boundary vertices,
+// cells the size of the mean boundary edge).
+// Returns the first one found.
+glm::dvec3 countTVertices(const std::vector<glm::dvec3>& points, const Edges& boundary, double tol,
+                          PatchMeshReport& report) {
   glm::dvec3 first_t(0.0);
   if (!boundary.empty()) {
     std::vector<uint32_t> boundary_vertices;
@@ -243,15 +251,53 @@ PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& pa
     }
   }
 
+  return first_t;
+}
+
+std::string firstProblem(const PatchMeshReport& report, const glm::dvec3& first_t,
+                         const glm::dvec3& first_inner) {
   if (report.refused_faces)
-    report.first_problem = std::to_string(report.refused_faces) + " faces refused by OpenMesh (non-manifold)";
-  else if (report.inconsistent_orientation)
-    report.first_problem = std::to_string(report.inconsistent_orientation) + " edges between faces of opposite orientation";
-  else if (report.t_vertices)
-    report.first_problem = std::to_string(report.t_vertices) + " T-vertices, the first at " + where(first_t);
-  else if (report.inner_boundary_edges)
-    report.first_problem =
-        std::to_string(report.inner_boundary_edges) + " boundary edges inside the set, the first near " + where(first_inner);
+    return std::to_string(report.refused_faces) + " faces refused by OpenMesh (non-manifold)";
+  if (report.inconsistent_orientation)
+    return std::to_string(report.inconsistent_orientation) +
+           " edges between faces of opposite orientation";
+  if (report.t_vertices)
+    return std::to_string(report.t_vertices) + " T-vertices, the first at " + where(first_t);
+  if (report.inner_boundary_edges)
+    return std::to_string(report.inner_boundary_edges) +
+           " boundary edges inside the set, the first near " + where(first_inner);
+  return {};
+}
+
+PatchMeshReport checkPatchMesh(const TriangleMesh& mesh, const NurbsPatchSet& patches, float tolerance) {
+  PatchMeshReport report;
+  // Exact weld (exact_weld.h); the geometry below works in double.
+  const WeldedTriangles welded = weldExactly(mesh);
+  const std::vector<std::array<uint32_t, 3>>& triangles = welded.triangles;
+  const std::vector<glm::dvec3> points(welded.points.begin(), welded.points.end());
+  report.degenerate_faces = welded.skipped;
+  for (const auto& [a, b, c] : triangles)  // zero area, kept in the mesh
+    if (glm::length(glm::cross(points[b] - points[a], points[c] - points[a])) == 0.0)
+      ++report.degenerate_faces;
+  report.vertices = points.size();
+
+  // Orientation: an edge shared by two faces must be used once in each direction.
+  for (const auto& [key, use] : countEdgeUses(triangles))
+    if (use.forward + use.backward == 2 && use.forward != 1) ++report.inconsistent_orientation;
+
+  const Edges boundary = halfEdgeBoundary(points, triangles, report);
+  report.boundary_edges = boundary.size();
+
+  // Distances: the given tolerance plus float rounding at the set's magnitude.
+  double magnitude = 0.0;
+  for (const glm::dvec3& p : points) magnitude = std::max({magnitude, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+  double tol = static_cast<double>(std::max(tolerance, 0.0f)) + 1e-6 * magnitude;
+  if (!std::isfinite(tol)) tol = 0.0;
+
+  const PatchBorders borders = patchBorders(patches, tol);
+  const glm::dvec3 first_inner = countInnerBoundaryEdges(points, boundary, borders, tol, report);
+  const glm::dvec3 first_t = countTVertices(points, boundary, tol, report);
+  report.first_problem = firstProblem(report, first_t, first_inner);
   return report;
 }
 

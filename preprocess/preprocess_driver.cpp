@@ -169,310 +169,398 @@ VisibilitySummary addVisibility(const std::filesystem::path& path,
   return summary;
 }
 
-}  // namespace
+// One run of the preprocessor: the state its stages hand on to each other, and the stages in
+// the order they run (runPreprocess below).
+class PreprocessRun {
+ public:
+  explicit PreprocessRun(const PreprocessOptions& options)
+      : options_(options),
+        progress_(options.progress),
+        run_start_(Clock::now()),
+        clock_(report_),
+        snapper_(storage_.position_step_m),
+        cache_(openCache()) {}
 
-PreprocessReport runPreprocess(const PreprocessOptions& options) {
+  void brickInputs();
+  void findSeams();
+  void buildBricks();
+  void mergeUpperLevels();
+  void pack();
+  void write();
+  void buildVisibility();
+  PreprocessReport finish();
+
+ private:
+  BrickCache openCache();
+  void packObjects();
+  void snapToFixpoint();
+  void packMeshClusters();
+  void packParametricClusters();
+  SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All}; }
+
+  const PreprocessOptions& options_;
+  Progress* progress_;
+  Clock::time_point run_start_;
+  PreprocessReport report_;
+  StageClock clock_;
+  std::unique_ptr<tbb::global_control> thread_limit_;
+  BrickingOptions bricking_;
+  DagOptions dag_options_;
+  DagOptions brick_options_;
+  PackageStorage storage_;
+  QuantizationSnapper snapper_;
+  BrickCache cache_;
+  BrickedScene scene_;
+  BrickSeams seams_;
+  std::vector<BrickRecord> bricks_;
+  std::vector<std::unique_ptr<ClusterDag>> resident_;  // bricks kept in memory after their build
+  std::vector<DagCluster> roots_;                      // every brick's roots, for the merge
+  ClusterDag upper_;                                   // the merged levels above the bricks
+  uint32_t upper_piece_ = 0;                           // the merged levels' snapping piece
+  uint64_t total_clusters_ = 0, total_groups_ = 0;    // in the bricks
+  std::vector<uint32_t> object_layers_;  // for the covered-face search: 4 bytes an object
+  std::filesystem::path written_path_;
+  double snap_in_build_ = 0.0, snap_in_pack_ = 0.0;  // reported as a stage of its own
+};
+
+void validateOptions(const PreprocessOptions& options) {
   if (options.inputs.empty()) throw std::invalid_argument("no input files");
   if (options.parametric_cluster_size < 1 || options.parametric_cluster_size > 65536)
     throw std::invalid_argument("preprocess: parametric cluster size must be 1..65536");
   if (options.cluster_size < 64 || options.cluster_size > 4096)
     throw std::invalid_argument("cluster size must be between 64 and 4096 triangles");
-  auto run_start = Clock::now();
-  PreprocessReport report;
-  StageClock clock(report);
-  Progress* progress = options.progress;
-  std::unique_ptr<tbb::global_control> thread_limit;
-  if (options.threads > 0)
-    thread_limit = std::make_unique<tbb::global_control>(
-        tbb::global_control::max_allowed_parallelism, options.threads);
+}
 
-  BrickingOptions bricking;
-  bricking.work_dir = workDirFor(options.output);
-  bricking.memory_budget_bytes = options.memory_budget_bytes;
-  bricking.max_brick_triangles = options.max_brick_triangles;
-  bricking.position_step_m = pkg::kDefaultPositionStepM;
-  bricking.progress = progress;
-  DagOptions dag_options;
-  dag_options.cluster_size = options.cluster_size;
+// The options of every stage, and the resume store keyed by the inputs and those options (a
+// fresh run empties it first).
+BrickCache PreprocessRun::openCache() {
+  if (options_.threads > 0)
+    thread_limit_ = std::make_unique<tbb::global_control>(
+        tbb::global_control::max_allowed_parallelism, options_.threads);
+  bricking_.work_dir = workDirFor(options_.output);
+  bricking_.memory_budget_bytes = options_.memory_budget_bytes;
+  bricking_.max_brick_triangles = options_.max_brick_triangles;
+  bricking_.position_step_m = pkg::kDefaultPositionStepM;
+  bricking_.progress = progress_;
+  dag_options_.cluster_size = options_.cluster_size;
 
   RunHash hash;
   hash.addValue(kPreprocessorRevision);
-  for (const auto& input : options.inputs) hash.addFile(std::filesystem::absolute(input));
-  hash.addBrickingOptions(bricking);
-  hash.addValue(options.cluster_size);
-  hash.addValue(options.parametric_cluster_size);
-  if (!options.resume) removeWorkDir(bricking.work_dir);
-  BrickCache cache(bricking.work_dir, hash.digest());
+  for (const auto& input : options_.inputs) hash.addFile(std::filesystem::absolute(input));
+  hash.addBrickingOptions(bricking_);
+  hash.addValue(options_.cluster_size);
+  hash.addValue(options_.parametric_cluster_size);
+  if (!options_.resume) removeWorkDir(bricking_.work_dir);
+  return BrickCache(bricking_.work_dir, hash.digest());
+}
 
-  // 1. Bricks on disk (or the finished bricking of a killed run).
-  BrickedScene scene;
-  if (options.resume) {
-    if (auto stored = loadBrickedScene(cache, bricking.work_dir)) {
-      scene = std::move(*stored);
-      report.bricking_reused = true;
+// 1. Bricks on disk (or the finished bricking of a killed run): a survey of the inputs' bounds
+// and sizes, then their triangles binned into bricks.
+void PreprocessRun::brickInputs() {
+  if (options_.resume) {
+    if (auto stored = loadBrickedScene(cache_, bricking_.work_dir)) {
+      scene_ = std::move(*stored);
+      report_.bricking_reused = true;
     }
   }
-  if (!report.bricking_reused) {
-    clock.start("survey");
-    SceneSurvey survey = surveyScene(options.inputs, bricking.nurbs_tolerance, progress);
-    throwIfCancelled(progress);
-    clock.start("brick");
-    scene = brickScene(options.inputs, survey, bricking);
-    storeBrickedScene(cache, scene);
+  if (!report_.bricking_reused) {
+    clock_.start("survey");
+    SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_);
+    throwIfCancelled(progress_);
+    clock_.start("brick");
+    scene_ = brickScene(options_.inputs, survey, bricking_);
+    storeBrickedScene(cache_, scene_);
   }
-  throwIfCancelled(progress);
-  report.input_triangles = scene.triangle_count;
-  report.primitives = scene.parametric_count;
-  report.objects = scene.object_count;
-  report.triangles_turned = scene.triangles_turned;
-  report.bricks = static_cast<uint32_t>(scene.bricks.size());
+  throwIfCancelled(progress_);
+  report_.input_triangles = scene_.triangle_count;
+  report_.primitives = scene_.parametric_count;
+  report_.objects = scene_.object_count;
+  report_.triangles_turned = scene_.triangles_turned;
+  report_.bricks = static_cast<uint32_t>(scene_.bricks.size());
+}
 
-  // 2. One LOD DAG per brick, seams locked so neighbouring bricks never crack. A finished brick
-  // goes to the resume store; memory keeps its roots (for the merge) and its quantization shifts
-  // (snapping pass 1, solved now while it is in memory). The last brick's DAG stays too when it
-  // is within budget / 8, so a one-brick model is never read back.
-  // Only the true seams are locked: the model's own open edges (uncapped pipes, sheets) stay free
-  // to simplify and drop, as in a one-brick build, which needs no locking at all.
-  DagOptions brick_options = dag_options;
-  BrickSeams seams;
-  if (scene.bricks.size() > 1) {
-    clock.start("seams");
-    seams = BrickSeams::find(scene, progress);
-    report.seam_edges = seams.size();
-    brick_options.lock_open_boundaries = true;
-    brick_options.is_seam_edge = [&seams](const glm::vec3& a, const glm::vec3& b) {
-      return seams.contains(a, b);
-    };
-  }
-  clock.start("build bricks");
-  beginStage(progress, "build bricks", scene.bricks.size());
-  PackageStorage storage;
-  brick_options.position_step_m = storage.position_step_m;
-  QuantizationSnapper snapper(storage.position_step_m);
-  const uint64_t resident_limit = options.memory_budget_bytes / 8;
-  std::vector<BrickRecord> bricks(scene.bricks.size());
-  std::vector<std::unique_ptr<ClusterDag>> resident(scene.bricks.size());
-  std::vector<DagCluster> roots;
-  uint64_t total_clusters = 0, total_groups = 0;
-  double snap_in_build = 0.0, snap_in_pack = 0.0;  // reported as a stage of its own
-  for (uint32_t b = 0; b < scene.bricks.size(); ++b) {
-    throwIfCancelled(progress);
+// 2a. The seams between bricks, locked in every brick's build so neighbouring bricks never
+// crack. Only the true seams are locked: the model's own open edges (uncapped pipes, sheets) stay
+// free to simplify and drop, as in a one-brick build, which needs no locking at all.
+void PreprocessRun::findSeams() {
+  brick_options_ = dag_options_;
+  if (scene_.bricks.size() <= 1) return;
+  clock_.start("seams");
+  seams_ = BrickSeams::find(scene_, progress_);
+  report_.seam_edges = seams_.size();
+  brick_options_.lock_open_boundaries = true;
+  brick_options_.is_seam_edge = [this](const glm::vec3& a, const glm::vec3& b) {
+    return seams_.contains(a, b);
+  };
+}
+
+// 2b. One LOD DAG per brick. A finished brick goes to the resume store; memory keeps its roots
+// (for the merge) and its quantization shifts (snapping pass 1, solved now while it is in
+// memory). The last brick's DAG stays too when it is within budget / 8, so a one-brick model is
+// never read back.
+void PreprocessRun::buildBricks() {
+  clock_.start("build bricks");
+  beginStage(progress_, "build bricks", scene_.bricks.size());
+  brick_options_.position_step_m = storage_.position_step_m;
+  const uint64_t resident_limit = options_.memory_budget_bytes / 8;
+  bricks_.resize(scene_.bricks.size());
+  resident_.resize(scene_.bricks.size());
+  for (uint32_t b = 0; b < scene_.bricks.size(); ++b) {
+    throwIfCancelled(progress_);
     std::optional<std::vector<uint8_t>> blob;
-    if (options.resume) blob = cache.load(b);
+    if (options_.resume) blob = cache_.load(b);
     ClusterDag dag;
     if (blob) {
-      dag = deserializeClusterDag(*blob, cache.blobPath(b).string());
-      ++report.bricks_reused;
+      dag = deserializeClusterDag(*blob, cache_.blobPath(b).string());
+      ++report_.bricks_reused;
     } else {
-      BrickMesh mesh = loadBrick(scene, b);
+      BrickMesh mesh = loadBrick(scene_, b);
       dag = buildClusterDag(
-          DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids}, brick_options);
+          DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids}, brick_options_);
       mesh = BrickMesh{};
       blob = serializeClusterDag(dag);
-      cache.store(b, *blob);
+      cache_.store(b, *blob);
     }
     const uint64_t dag_bytes = blob->size();
     blob.reset();
-    BrickRecord& brick = bricks[b];
-    brick.first_cluster = uint32_t(total_clusters);
-    brick.first_group = uint32_t(total_groups);
+    BrickRecord& brick = bricks_[b];
+    brick.first_cluster = uint32_t(total_clusters_);
+    brick.first_group = uint32_t(total_groups_);
     brick.cluster_count = uint32_t(dag.clusters.size());
     brick.group_count = uint32_t(dag.groups.size());
-    total_clusters += dag.clusters.size();
-    total_groups += dag.groups.size();
-    if (total_clusters >= pkg::kNone || total_groups >= pkg::kNone)
+    total_clusters_ += dag.clusters.size();
+    total_groups_ += dag.groups.size();
+    if (total_clusters_ >= pkg::kNone || total_groups_ >= pkg::kNone)
       throw std::runtime_error("preprocess: too many clusters or groups for the package format");
     for (uint32_t c = 0; c < dag.clusters.size(); ++c)
       if (dag.clusters[c].parent_group == kNoGroup) {
         brick.root_ids.push_back(c);
-        roots.push_back(dag.clusters[c]);
-        report.merge_front_triangles += dag.clusters[c].triangleCount();
+        roots_.push_back(dag.clusters[c]);
+        report_.merge_front_triangles += dag.clusters[c].triangleCount();
       }
-    addLevels(report.triangles_per_level, dag);
+    addLevels(report_.triangles_per_level, dag);
     // Only the last brick may stay: earlier ones would sit beside every later brick build, which
     // is where the peak is. A one-brick model is then never read back (nor welded twice).
-    const bool keep = b + 1 == scene.bricks.size() && dag_bytes <= resident_limit;
+    const bool keep = b + 1 == scene_.bricks.size() && dag_bytes <= resident_limit;
     const auto snap_start = Clock::now();
-    snapper.solve(b, brickSnapPiece(dag, brick), keep);
-    snap_in_build += secondsSince(snap_start);
-    if (keep) resident[b] = std::make_unique<ClusterDag>(std::move(dag));
-    updateProgress(progress, b + 1);
+    snapper_.solve(b, brickSnapPiece(dag, brick), keep);
+    snap_in_build_ += secondsSince(snap_start);
+    if (keep) resident_[b] = std::make_unique<ClusterDag>(std::move(dag));
+    updateProgress(progress_, b + 1);
   }
-  endStage(progress);
-  throwIfCancelled(progress);
+  endStage(progress_);
+  throwIfCancelled(progress_);
+}
 
-  // 3. Upper levels from all the bricks' roots, renumbered after the bricks' clusters and groups;
-  // the roots' new parents are noted for when their bricks are packed.
-  clock.start("merge");
-  beginStage(progress, "merge bricks", 0);
-  ClusterDag upper;
+// 3. Upper levels from all the bricks' roots, renumbered after the bricks' clusters and groups;
+// the roots' new parents are noted for when their bricks are packed.
+void PreprocessRun::mergeUpperLevels() {
+  clock_.start("merge");
+  beginStage(progress_, "merge bricks", 0);
   {
-    MergedRoots merged = mergeBrickRoots(std::move(roots), dag_options);
-    roots = {};
-    report.root_triangles = merged.dag.root_triangles;
+    MergedRoots merged = mergeBrickRoots(std::move(roots_), dag_options_);
+    roots_ = {};
+    report_.root_triangles = merged.dag.root_triangles;
     std::vector<uint32_t> root_global;  // merged front index -> DAG cluster
-    for (BrickRecord& brick : bricks) {
+    for (BrickRecord& brick : bricks_) {
       for (uint32_t id : brick.root_ids) root_global.push_back(brick.first_cluster + id);
       brick.root_parents.resize(brick.root_ids.size());
     }
     auto group_id = [&](uint32_t g) {
-      return g == kNoGroup ? kNoGroup : uint32_t(total_groups) + g;
+      return g == kNoGroup ? kNoGroup : uint32_t(total_groups_) + g;
     };
     uint32_t f = 0;
-    for (BrickRecord& brick : bricks)
+    for (BrickRecord& brick : bricks_)
       for (RootParent& parent : brick.root_parents) {
         const DagCluster& root = merged.dag.clusters[f++];
         parent = {group_id(root.parent_group), root.parent_error, root.parent_lod_center,
                   root.parent_lod_radius};
       }
-    appendMergedLevels(merged, root_global, uint32_t(total_clusters), uint32_t(total_groups),
-                       upper.clusters, upper.groups);
-    addLevels(report.triangles_per_level, upper);
+    appendMergedLevels(merged, root_global, uint32_t(total_clusters_), uint32_t(total_groups_),
+                       upper_.clusters, upper_.groups);
+    addLevels(report_.triangles_per_level, upper_);
   }
-  if (total_clusters + upper.clusters.size() >= pkg::kNone ||
-      total_groups + upper.groups.size() >= pkg::kNone)
+  if (total_clusters_ + upper_.clusters.size() >= pkg::kNone ||
+      total_groups_ + upper_.groups.size() >= pkg::kNone)
     throw std::runtime_error("preprocess: too many clusters or groups for the package format");
-  const uint32_t upper_piece = uint32_t(bricks.size());
-  const SnapPiece upper_snap{upper.clusters, {}, SharedPositions::All};
-  snapper.solve(upper_piece, upper_snap, true);
-  endStage(progress);
-  report.clusters = total_clusters + upper.clusters.size();
+  upper_piece_ = uint32_t(bricks_.size());
+  snapper_.solve(upper_piece_, upperSnapPiece(), true);
+  endStage(progress_);
+  report_.clusters = total_clusters_ + upper_.clusters.size();
+}
 
-  // 4. Package records: layers, objects, mesh clusters, parametric clusters. Mesh clusters go
-  // brick by brick, then the merged levels (so each group's produced clusters stay contiguous);
-  // finished pages stream to a spill file in the work dir.
-  clock.start("pack");
-  beginStage(progress, "pack", bricks.size() + 1);
-  // Snapping pass 1 to its fixpoint: a piece whose shared vertices another piece coarsened is
-  // solved again (rare; a re-read brick at most).
+// 4. Package records: layers, objects, mesh clusters, parametric clusters. Pages and tables
+// stream to files in the work dir as they are filled: what stays in memory while packing is one
+// brick's DAG, the open page and a short tail of each table, whatever the model's size.
+void PreprocessRun::pack() {
+  clock_.start("pack");
+  beginStage(progress_, "pack", bricks_.size() + 1);
+  snapToFixpoint();
+  storage_.origin = scene_.origin;
+  storage_.input_hash = cache_.runHash();
+  std::filesystem::create_directories(bricking_.work_dir);
+  storage_.spillPagesTo(bricking_.work_dir / "pages.spill");
+  // Each table keeps about budget / 1024 in memory (2 MiB at the default 2G).
+  storage_.spillTablesTo(bricking_.work_dir / "tables",
+                         std::clamp<uint64_t>(options_.memory_budget_bytes / 1024, 1024, 4u << 20));
+  packObjects();
+  packMeshClusters();
+  packParametricClusters();
+  endStage(progress_);
+}
+
+// Snapping pass 1 to its fixpoint: a piece whose shared vertices another piece coarsened is
+// solved again (rare; a re-read brick at most).
+void PreprocessRun::snapToFixpoint() {
   const auto fixpoint_start = Clock::now();
-  for (std::vector<uint32_t> stale = snapper.stalePieces(); !stale.empty();
-       stale = snapper.stalePieces()) {
+  for (std::vector<uint32_t> stale = snapper_.stalePieces(); !stale.empty();
+       stale = snapper_.stalePieces()) {
     for (uint32_t p : stale) {
-      if (p == upper_piece) {
-        snapper.solve(p, upper_snap, true);
+      if (p == upper_piece_) {
+        snapper_.solve(p, upperSnapPiece(), true);
         continue;
       }
       std::unique_ptr<ClusterDag> loaded;
-      const ClusterDag& dag = resident[p] ? *resident[p] : *(loaded = loadBrickDag(cache, p));
-      snapper.solve(p, brickSnapPiece(dag, bricks[p]), resident[p] != nullptr);
-      ++report.bricks_resolved;
+      const ClusterDag& dag = resident_[p] ? *resident_[p] : *(loaded = loadBrickDag(cache_, p));
+      snapper_.solve(p, brickSnapPiece(dag, bricks_[p]), resident_[p] != nullptr);
+      ++report_.bricks_resolved;
     }
   }
-  snap_in_pack += secondsSince(fixpoint_start);
-  storage.origin = scene.origin;
-  storage.input_hash = cache.runHash();
-  std::filesystem::create_directories(bricking.work_dir);
-  // Pages and tables stream to files as they are filled: what stays in memory while packing is
-  // one brick's DAG, the open page and a short tail of each table, whatever the model's size.
-  storage.spillPagesTo(bricking.work_dir / "pages.spill");
-  // Each table keeps about budget / 1024 in memory (2 MiB at the default 2G).
-  storage.spillTablesTo(bricking.work_dir / "tables",
-                        std::clamp<uint64_t>(options.memory_budget_bytes / 1024, 1024, 4u << 20));
-  for (const Layer& layer : scene.layers) storage.addLayer(layer);
-  std::vector<uint32_t> object_layers;  // for the covered-face search: 4 bytes an object
-  forEachObject(scene, [&](const BrickedObject& object) {
-    object_layers.push_back(object.layer);
+  snap_in_pack_ += secondsSince(fixpoint_start);
+}
+
+void PreprocessRun::packObjects() {
+  for (const Layer& layer : scene_.layers) storage_.addLayer(layer);
+  forEachObject(scene_, [&](const BrickedObject& object) {
+    object_layers_.push_back(object.layer);
     ObjectInfo info;
     info.id = object.source_id;
     info.name = object.name;
     info.layer = object.layer;
     info.db_key = object.db_key;
     info.color_rgba = object.color_rgba;
-    storage.addObject(info, object.bounds_min, object.bounds_max,
-                      object.closed_surface ? pkg::kObjectClosedSurface : 0u);
+    storage_.addObject(info, object.bounds_min, object.bounds_max,
+                       object.closed_surface ? pkg::kObjectClosedSurface : 0u);
   });
-  report.shared_positions = snapper.sharedPositions();
-  DagPlacement placement = beginDagPlacement(storage);
-  placement.max_shift = snapper.maxShift();
-  placement.coarsened_vertices = snapper.coarsenedVertices();
+}
+
+// Mesh clusters brick by brick, then the merged levels, so each group's produced clusters stay
+// contiguous.
+void PreprocessRun::packMeshClusters() {
+  report_.shared_positions = snapper_.sharedPositions();
+  DagPlacement placement = beginDagPlacement(storage_);
+  placement.max_shift = snapper_.maxShift();
+  placement.coarsened_vertices = snapper_.coarsenedVertices();
   // Snapping moves a vertex by up to half a cell of the coarsest grid: every lod sphere grows by
   // that much (package_assembly.h).
   placement.lod_slack =
-      static_cast<float>(quantizationErrorM(storage.position_step_m, placement.max_shift));
+      static_cast<float>(quantizationErrorM(storage_.position_step_m, placement.max_shift));
   std::vector<uint32_t> shifts;
-  for (uint32_t b = 0; b < bricks.size(); ++b) {
-    throwIfCancelled(progress);
-    std::unique_ptr<ClusterDag> dag = resident[b] ? std::move(resident[b]) : loadBrickDag(cache, b);
-    BrickRecord& brick = bricks[b];
+  for (uint32_t b = 0; b < bricks_.size(); ++b) {
+    throwIfCancelled(progress_);
+    std::unique_ptr<ClusterDag> dag =
+        resident_[b] ? std::move(resident_[b]) : loadBrickDag(cache_, b);
+    BrickRecord& brick = bricks_[b];
     const auto snap_start = Clock::now();
-    const auto snapped = snapper.snap(b, brickSnapPiece(*dag, brick), shifts);
-    snap_in_pack += secondsSince(snap_start);
+    const auto snapped = snapper_.snap(b, brickSnapPiece(*dag, brick), shifts);
+    snap_in_pack_ += secondsSince(snap_start);
     renumberBrick(*dag, brick);
     addDagPieceToPackage(*dag, brick.first_cluster, brick.first_group, snapped, shifts, placement,
-                         storage);
-    updateProgress(progress, b + 1);
+                         storage_);
+    updateProgress(progress_, b + 1);
   }
-  {
-    const auto snapped = snapper.snap(upper_piece, upper_snap, shifts);
-    addDagPieceToPackage(upper, uint32_t(total_clusters), uint32_t(total_groups), snapped, shifts,
-                         placement, storage);
-    upper = ClusterDag{};
-  }
-  // Parametric clusters out of core: sorted runs within budget / 8, merged into the storage.
+  const auto snapped = snapper_.snap(upper_piece_, upperSnapPiece(), shifts);
+  addDagPieceToPackage(upper_, uint32_t(total_clusters_), uint32_t(total_groups_), snapped, shifts,
+                       placement, storage_);
+  upper_ = ClusterDag{};
+}
+
+// Parametric clusters out of core: sorted runs within budget / 8, merged into the storage, with
+// the sealed pipe runs and covered box faces searched once here rather than at every start of
+// the runtime.
+void PreprocessRun::packParametricClusters() {
   ParametricSortOptions sort_options;
-  sort_options.work_dir = bricking.work_dir / "parametric-runs";
-  sort_options.memory_budget_bytes = std::max<uint64_t>(options.memory_budget_bytes / 8, 1u << 20);
-  sort_options.max_per_cluster = options.parametric_cluster_size;
+  sort_options.work_dir = bricking_.work_dir / "parametric-runs";
+  sort_options.memory_budget_bytes = std::max<uint64_t>(options_.memory_budget_bytes / 8, 1u << 20);
+  sort_options.max_per_cluster = options_.parametric_cluster_size;
   const ParametricStream parametrics =
       [&](const std::function<void(std::span<const ParametricItem>)>& sink) {
         std::vector<ParametricItem> items;
-        forEachParametricBatch(scene, 4096, [&](std::span<const ParametricRecord> batch) {
+        forEachParametricBatch(scene_, 4096, [&](std::span<const ParametricRecord> batch) {
           items.clear();
           for (const ParametricRecord& r : batch)
             items.push_back({r.object, r.primitive, r.transform});
           sink(items);
         });
       };
-  // Sealed pipe runs and covered box faces, searched once here rather than at every start of
-  // the runtime.
-  const InstanceFlagMarking marked = markInstanceFlags(parametrics, storage.origin, object_layers);
-  object_layers = {};
+  const InstanceFlagMarking marked =
+      markInstanceFlags(parametrics, storage_.origin, object_layers_);
+  object_layers_ = {};
   sort_options.instance_role_flags = marked.role_flags;
-  storage.sealed_runs_marked = true;
-  storage.covered_faces_marked = true;
-  report.sealed_run_members = marked.sealed.sealed_members;
-  report.sealed_run_closers = marked.sealed.closers;
-  report.covered_box_faces = marked.covered.covered_faces;
-  const ParametricSortStats sorted = addParametricClustersOutOfCore(parametrics, sort_options, storage);
-  report.parametric_clusters = sorted.clusters;
-  report.parametric_sort_runs = sorted.runs;
-  endStage(progress);
+  storage_.sealed_runs_marked = true;
+  storage_.covered_faces_marked = true;
+  report_.sealed_run_members = marked.sealed.sealed_members;
+  report_.sealed_run_closers = marked.sealed.closers;
+  report_.covered_box_faces = marked.covered.covered_faces;
+  const ParametricSortStats sorted =
+      addParametricClustersOutOfCore(parametrics, sort_options, storage_);
+  report_.parametric_clusters = sorted.clusters;
+  report_.parametric_sort_runs = sorted.runs;
+}
 
-  // 5. One file, written atomically; with visibility, first inside the work directory, so the
-  // final name only ever holds a finished package.
-  clock.start("write");
-  beginStage(progress, "write package", 0);
-  const std::filesystem::path written_path =
-      options.visibility ? bricking.work_dir / "package.twk" : options.output;
-  PackageWriteStats written = writePackage(storage, written_path);
-  storage = PackageStorage{};
-  endStage(progress);
-  report.package_bytes = written.file_bytes;
-  throwIfCancelled(progress);
+// 5. One file, written atomically; with visibility, first inside the work directory, so the
+// final name only ever holds a finished package.
+void PreprocessRun::write() {
+  clock_.start("write");
+  beginStage(progress_, "write package", 0);
+  written_path_ = options_.visibility ? bricking_.work_dir / "package.twk" : options_.output;
+  PackageWriteStats written = writePackage(storage_, written_path_);
+  storage_ = PackageStorage{};
+  endStage(progress_);
+  report_.package_bytes = written.file_bytes;
+  throwIfCancelled(progress_);
+}
 
-  // 6. Visibility, from the written package; its section replaces the empty one.
-  if (options.visibility) {
-    clock.start("visibility");
-    report.visibility = addVisibility(written_path, options);
-    std::filesystem::rename(written_path, options.output);
-    report.package_bytes = std::filesystem::file_size(options.output);
+// 6. Visibility, from the written package; its section replaces the empty one.
+void PreprocessRun::buildVisibility() {
+  if (!options_.visibility) return;
+  clock_.start("visibility");
+  report_.visibility = addVisibility(written_path_, options_);
+  std::filesystem::rename(written_path_, options_.output);
+  report_.package_bytes = std::filesystem::file_size(options_.output);
+}
+
+// Snapping ran inside "build bricks" and "pack": shown apart, the stages still sum to the run.
+PreprocessReport PreprocessRun::finish() {
+  clock_.stop();
+  for (StageTime& stage : report_.stages) {
+    if (stage.name == "build bricks") stage.seconds -= snap_in_build_;
+    if (stage.name == "pack") stage.seconds -= snap_in_pack_;
   }
-  clock.stop();
-  // Snapping ran inside "build bricks" and "pack": shown apart, the stages still sum to the run.
-  for (StageTime& stage : report.stages) {
-    if (stage.name == "build bricks") stage.seconds -= snap_in_build;
-    if (stage.name == "pack") stage.seconds -= snap_in_pack;
-  }
-  for (size_t i = 0; i < report.stages.size(); ++i)
-    if (report.stages[i].name == "pack") {
-      report.stages.insert(report.stages.begin() + i, {"snap", snap_in_build + snap_in_pack});
+  for (size_t i = 0; i < report_.stages.size(); ++i)
+    if (report_.stages[i].name == "pack") {
+      report_.stages.insert(report_.stages.begin() + i, {"snap", snap_in_build_ + snap_in_pack_});
       break;
     }
-  if (!options.keep_work_dir) removeWorkDir(bricking.work_dir);
-  report.peak_rss_bytes = peakRssBytes();
-  report.seconds = std::chrono::duration<double>(Clock::now() - run_start).count();
-  return report;
+  if (!options_.keep_work_dir) removeWorkDir(bricking_.work_dir);
+  report_.peak_rss_bytes = peakRssBytes();
+  report_.seconds = secondsSince(run_start_);
+  return std::move(report_);
+}
+
+}  // namespace
+
+PreprocessReport runPreprocess(const PreprocessOptions& options) {
+  validateOptions(options);
+  PreprocessRun run(options);
+  run.brickInputs();
+  run.findSeams();
+  run.buildBricks();
+  run.mergeUpperLevels();
+  run.pack();
+  run.write();
+  run.buildVisibility();
+  return run.finish();
 }
 
 }  // namespace tw

@@ -192,6 +192,8 @@ void Walkthrough::adaptTau(double frame_ms) {
   tau_px_ = std::clamp(tau_px_, options_.min_tau_px, options_.max_tau_px);
 }
 
+// One frame: the cut (and the prefetch cut ahead), then its clusters drawn with the frame's
+// occlusion mode, then the frame's statistics.
 FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   const auto frame_start = Clock::now();
   FrameStats stats;
@@ -204,50 +206,73 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   const double aspect = double(renderer_->width()) / double(renderer_->height());
   const glm::dvec3 eye = camera.position - view_->origin();
   near_reach_m_ = camera.nearPlaneReach(aspect);
-  const std::vector<uint32_t>* draw_list = &reference_clusters_;
   const auto cut_start = Clock::now();
-  if (!options_.reference) {
-    CutView cut_view;
-    cut_view.eye = eye;
-    cut_view.frustum = makeFrustum(camera, eye, aspect);
-    cut_view.pixel_scale = camera.pixelScale(renderer_->height());
-    cut_view.near_m = camera.near_m;
-    CutOptions cut_options;
-    cut_options.tau_px = tau_px_;
-    cut_options.min_feature_px = options_.min_feature_px;
-    cut_options.frustum_cull = options_.frustum_cull;
-    auto resident = [this](uint32_t page) { return pager_->resident(page); };
-    cut_->select(cut_view, cut_options, resident, cut_result_);
-    for (const PageWant& want : cut_result_.wanted) pager_->request(want.page, want.priority);
-
-    // Prefetch: the cut from where the camera will be, at a lower priority than what is
-    // missing now.
-    if (options_.prefetch && last_position_ && time_s > last_time_s_) {
-      const double step_s = time_s - last_time_s_;
-      const glm::dvec3 velocity = (camera.position - *last_position_) / step_s;
-      if (glm::length(velocity) > 1e-3) {
-        // At least as far as the next frame will be, when frames are further apart than that
-        // (a replay at a low frame rate).
-        Camera ahead = camera;
-        ahead.position += velocity * std::max(options_.prefetch_ahead_s, step_s);
-        const glm::dvec3 ahead_eye = ahead.position - view_->origin();
-        cut_view.eye = ahead_eye;
-        cut_view.frustum = makeFrustum(ahead, ahead_eye, aspect);
-        cut_options.collect_draws = false;
-        cut_->select(cut_view, cut_options, resident, prefetch_result_);
-        for (const PageWant& want : prefetch_result_.wanted)
-          pager_->request(want.page, 0.5f * want.priority);
-      }
-    }
-    draw_list = &cut_result_.clusters;
-    stats.nodes_visited = cut_result_.stats.groups_visited + cut_result_.stats.clusters_tested;
-    stats.culled_frustum = cut_result_.stats.culled_frustum;
-    stats.culled_small = cut_result_.stats.culled_small;
-    stats.ancestor_fallbacks = cut_result_.stats.groups_blocked;
-  }
+  const std::vector<uint32_t>& draw_list =
+      options_.reference ? reference_clusters_ : selectCut(camera, eye, aspect, time_s, stats);
   stats.cpu_cut_ms = msSince(cut_start);
   const std::vector<uint32_t>& parametric_list =
       options_.reference ? all_parametric_ : cut_result_.parametric_clusters;
+  rememberView(camera, eye, aspect, time_s, parametric_list);
+
+  // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
+  for (uint32_t c : draw_list) pager_->touch(view_->clusters()[c].page);
+  renderer_->beginFrame(last_rotation_, last_projection_);
+  // Draw items in double: offset of each cluster's grid origin from the eye.
+  items_.clear();
+  const OcclusionMode mode = options_.reference ? OcclusionMode::Off : options_.occlusion;
+  if (mode == OcclusionMode::Hzb)
+    drawWithHzb(eye, draw_list, parametric_list, stats);
+  else
+    drawWithoutHzb(mode, eye, draw_list, stats);
+  finishFrame(frame_start, stats);
+  return stats;
+}
+
+// The LOD cut from the camera, its missing pages requested; with prefetching, also the cut from
+// where the camera will be, at a lower priority than what is missing now.
+const std::vector<uint32_t>& Walkthrough::selectCut(const Camera& camera, const glm::dvec3& eye,
+                                                    double aspect, double time_s,
+                                                    FrameStats& stats) {
+  CutView cut_view;
+  cut_view.eye = eye;
+  cut_view.frustum = makeFrustum(camera, eye, aspect);
+  cut_view.pixel_scale = camera.pixelScale(renderer_->height());
+  cut_view.near_m = camera.near_m;
+  CutOptions cut_options;
+  cut_options.tau_px = tau_px_;
+  cut_options.min_feature_px = options_.min_feature_px;
+  cut_options.frustum_cull = options_.frustum_cull;
+  auto resident = [this](uint32_t page) { return pager_->resident(page); };
+  cut_->select(cut_view, cut_options, resident, cut_result_);
+  for (const PageWant& want : cut_result_.wanted) pager_->request(want.page, want.priority);
+
+  if (options_.prefetch && last_position_ && time_s > last_time_s_) {
+    const double step_s = time_s - last_time_s_;
+    const glm::dvec3 velocity = (camera.position - *last_position_) / step_s;
+    if (glm::length(velocity) > 1e-3) {
+      // At least as far as the next frame will be, when frames are further apart than that
+      // (a replay at a low frame rate).
+      Camera ahead = camera;
+      ahead.position += velocity * std::max(options_.prefetch_ahead_s, step_s);
+      const glm::dvec3 ahead_eye = ahead.position - view_->origin();
+      cut_view.eye = ahead_eye;
+      cut_view.frustum = makeFrustum(ahead, ahead_eye, aspect);
+      cut_options.collect_draws = false;
+      cut_->select(cut_view, cut_options, resident, prefetch_result_);
+      for (const PageWant& want : prefetch_result_.wanted)
+        pager_->request(want.page, 0.5f * want.priority);
+    }
+  }
+  stats.nodes_visited = cut_result_.stats.groups_visited + cut_result_.stats.clusters_tested;
+  stats.culled_frustum = cut_result_.stats.culled_frustum;
+  stats.culled_small = cut_result_.stats.culled_small;
+  stats.ancestor_fallbacks = cut_result_.stats.groups_blocked;
+  return cut_result_.clusters;
+}
+
+// What later draws of this frame (parametrics, redrawUnculled) and the next frame's prefetch use.
+void Walkthrough::rememberView(const Camera& camera, const glm::dvec3& eye, double aspect,
+                               double time_s, std::span<const uint32_t> parametric_list) {
   last_parametric_.assign(parametric_list.begin(), parametric_list.end());
   last_parametric_view_.eye = eye;
   last_parametric_view_.forward = camera.forward();
@@ -257,86 +282,91 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   last_parametric_view_.tolerance_px = tau_px_;
   last_position_ = camera.position;
   last_time_s_ = time_s;
-
-  // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
-  for (uint32_t c : *draw_list) pager_->touch(view_->clusters()[c].page);
-  const OcclusionMode mode = options_.reference ? OcclusionMode::Off : options_.occlusion;
   last_eye_ = eye;
   last_rotation_ = glm::mat4(camera.viewRotation());
   last_projection_ = glm::mat4(camera.projection(aspect));
-  renderer_->beginFrame(last_rotation_, last_projection_);
-  // Draw items in double: offset of each cluster's grid origin from the eye.
-  items_.clear();
-  if (mode == OcclusionMode::Hzb) {
-    OcclusionFrame frame;
-    frame.renderer = renderer_.get();
-    frame.pool = pool_.get();
-    frame.pager = pager_.get();
-    frame.eye = eye;
-    frame.view_projection = last_projection_ * last_rotation_;  // as the renderer multiplies
-    stats.view_cell = -1;
-    // Parametric clusters take both passes like mesh clusters (their boxes are tested the same
-    // way): inside a plant most pipes are behind decks and walls, which are parametric too.
-    hzb_cut_.assign(draw_list->begin(), draw_list->end());
-    if (options_.parametrics != ParametricMode::Off)
-      hzb_cut_.insert(hzb_cut_.end(), parametric_list.begin(), parametric_list.end());
+}
+
+// hzb: last frame's visible clusters first, a pyramid from their depth, then the rest of the cut
+// tested against it.
+void Walkthrough::drawWithHzb(const glm::dvec3& eye, std::span<const uint32_t> draw_list,
+                              std::span<const uint32_t> parametric_list, FrameStats& stats) {
+  OcclusionFrame frame;
+  frame.renderer = renderer_.get();
+  frame.pool = pool_.get();
+  frame.pager = pager_.get();
+  frame.eye = eye;
+  frame.view_projection = last_projection_ * last_rotation_;  // as the renderer multiplies
+  stats.view_cell = -1;
+  // Parametric clusters take both passes like mesh clusters (their boxes are tested the same
+  // way): inside a plant most pipes are behind decks and walls, which are parametric too.
+  hzb_cut_.assign(draw_list.begin(), draw_list.end());
+  if (options_.parametrics != ParametricMode::Off)
+    hzb_cut_.insert(hzb_cut_.end(), parametric_list.begin(), parametric_list.end());
+  else
+    stats.parametric_skipped = uint32_t(parametric_list.size());
+  culler_->splitByLastVisible(eye, hzb_cut_, pass1_, rest_, stats);
+  splitByKind(pass1_, mesh_pass_, parametric_pass_);
+  // The first pass overlaps its parts (docs/runtime.md, "Overlap"): a worker starts choosing
+  // and expanding the tessellated parametrics (prepare() hands their runs to it and returns)
+  // while this thread submits the meshes, and the flush hands the meshes to llvmpipe's
+  // rasterizer threads before the parametrics follow, each run drawn as soon as it is done.
+  last_parametric_view_.pass = InstancePass::First;
+  if (!parametric_pass_.empty())
+    parametric_->prepare(parametric_pass_, last_parametric_view_, options_.parametrics);
+  appendItems(mesh_pass_, eye, items_);
+  renderer_->draw(*pool_, items_);
+  glFlush();
+  // Tessellated parametrics are also culled instance by instance, in the same two passes
+  // (parametric_instance_meshes.h, "Occlusion").
+  auto box_hidden = [this, &frame](const glm::vec3& lo, const glm::vec3& hi) {
+    return culler_->boxHidden(lo, hi, frame);
+  };
+  drawParametrics(parametric_pass_, &stats);
+  full_order_.assign(mesh_pass_.begin(), mesh_pass_.end());
+  full_order_pass1_ = mesh_pass_.size();
+  culler_->cullRest(frame, rest_, pass2_, stats);
+  splitByKind(pass2_, mesh_pass_, parametric_pass_);
+  const size_t pass1_items = items_.size();
+  appendItems(mesh_pass_, eye, items_);
+  renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(pass1_items));
+  last_parametric_view_.pass = InstancePass::Second;
+  last_parametric_view_.box_hidden = box_hidden;
+  drawParametrics(parametric_pass_, &stats);
+  last_parametric_view_.pass = InstancePass::All;
+  last_parametric_view_.box_hidden = nullptr;
+  culler_->recordVisible(frame, pass1_, pass2_, stats);
+  // Resting, the culler built no pyramid this frame: every instance drawn counts as visible,
+  // without a test per instance that could only say so (47,000 a frame on the 50M orbit).
+  if (options_.parametrics == ParametricMode::Tessellated) {
+    if (culler_->pyramidCurrent())
+      parametric_->recordInstanceVisibility(box_hidden);
     else
-      stats.parametric_skipped = uint32_t(parametric_list.size());
-    culler_->splitByLastVisible(eye, hzb_cut_, pass1_, rest_, stats);
-    splitByKind(pass1_, mesh_pass_, parametric_pass_);
-    // The first pass overlaps its parts (docs/runtime.md, "Overlap"): a worker starts choosing
-    // and expanding the tessellated parametrics (prepare() hands their runs to it and returns)
-    // while this thread submits the meshes, and the flush hands the meshes to llvmpipe's
-    // rasterizer threads before the parametrics follow, each run drawn as soon as it is done.
-    last_parametric_view_.pass = InstancePass::First;
-    if (!parametric_pass_.empty())
-      parametric_->prepare(parametric_pass_, last_parametric_view_, options_.parametrics);
-    appendItems(mesh_pass_, eye, items_);
-    renderer_->draw(*pool_, items_);
-    glFlush();
-    // Tessellated parametrics are also culled instance by instance, in the same two passes
-    // (parametric_instance_meshes.h, "Occlusion").
-    auto box_hidden = [this, &frame](const glm::vec3& lo, const glm::vec3& hi) {
-      return culler_->boxHidden(lo, hi, frame);
-    };
-    drawParametrics(parametric_pass_, &stats);
-    full_order_.assign(mesh_pass_.begin(), mesh_pass_.end());
-    full_order_pass1_ = mesh_pass_.size();
-    culler_->cullRest(frame, rest_, pass2_, stats);
-    splitByKind(pass2_, mesh_pass_, parametric_pass_);
-    const size_t pass1_items = items_.size();
-    appendItems(mesh_pass_, eye, items_);
-    renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(pass1_items));
-    last_parametric_view_.pass = InstancePass::Second;
-    last_parametric_view_.box_hidden = box_hidden;
-    drawParametrics(parametric_pass_, &stats);
-    last_parametric_view_.pass = InstancePass::All;
-    last_parametric_view_.box_hidden = nullptr;
-    culler_->recordVisible(frame, pass1_, pass2_, stats);
-    // Resting, the culler built no pyramid this frame: every instance drawn counts as visible,
-    // without a test per instance that could only say so (47,000 a frame on the 50M orbit).
-    if (options_.parametrics == ParametricMode::Tessellated) {
-      if (culler_->pyramidCurrent())
-        parametric_->recordInstanceVisibility(box_hidden);
-      else
-        parametric_->recordInstanceVisibility(nullptr);
-    }
-    stats.pass1_clusters = uint32_t(pass1_.size());
-    stats.pass2_clusters = uint32_t(pass2_.size());
-    splitByKind(rest_, mesh_pass_, parametric_pass_);
-    full_order_.insert(full_order_.end(), mesh_pass_.begin(), mesh_pass_.end());
-  } else {
-    const std::vector<uint32_t>* list = draw_list;
-    if (mode == OcclusionMode::Pvs) {
-      culler_->filterPvs(eye, *draw_list, drawn_, stats);
-      list = &drawn_;
-    }
-    appendItems(*list, eye, items_);
-    renderer_->draw(*pool_, items_);
-    drawParametrics(last_parametric_, &stats);
-    full_order_.assign(draw_list->begin(), draw_list->end());
-    full_order_pass1_ = full_order_.size();
+      parametric_->recordInstanceVisibility(nullptr);
   }
+  stats.pass1_clusters = uint32_t(pass1_.size());
+  stats.pass2_clusters = uint32_t(pass2_.size());
+  splitByKind(rest_, mesh_pass_, parametric_pass_);
+  full_order_.insert(full_order_.end(), mesh_pass_.begin(), mesh_pass_.end());
+}
+
+// off and pvs (the latter keeps the cut's clusters in the view cell's visible set): one pass.
+void Walkthrough::drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
+                                 const std::vector<uint32_t>& draw_list, FrameStats& stats) {
+  const std::vector<uint32_t>* list = &draw_list;
+  if (mode == OcclusionMode::Pvs) {
+    culler_->filterPvs(eye, draw_list, drawn_, stats);
+    list = &drawn_;
+  }
+  appendItems(*list, eye, items_);
+  renderer_->draw(*pool_, items_);
+  drawParametrics(last_parametric_, &stats);
+  full_order_.assign(draw_list.begin(), draw_list.end());
+  full_order_pass1_ = full_order_.size();
+}
+
+// Triangles drawn, GPU time, the pager's state and the frame's time; tau adapts to it.
+void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) {
   for (const DrawItem& item : items_) {
     stats.triangles_drawn += item.placement.triangle_count;
     if (!item.cull_back) stats.two_sided_triangles += item.placement.triangle_count;
@@ -363,7 +393,6 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   stats.frame_ms = msSince(frame_start);
   if (!options_.reference) adaptTau(stats.frame_ms);
   ++frame_;
-  return stats;
 }
 
 }  // namespace tw

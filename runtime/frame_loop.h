@@ -15,9 +15,12 @@
 // GPU: it reads the pyramid back in the middle of the frame.)
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
+#include <vector>
 
 #include "camera.h"
 #include "frame_stats.h"
@@ -99,6 +102,16 @@ class Walkthrough {
 
  private:
   void uploadReady(FrameStats& stats);
+  // The steps of renderFrame, in order.
+  const std::vector<uint32_t>& selectCut(const Camera& camera, const glm::dvec3& eye, double aspect,
+                                         double time_s, FrameStats& stats);
+  void rememberView(const Camera& camera, const glm::dvec3& eye, double aspect, double time_s,
+                    std::span<const uint32_t> parametric_list);
+  void drawWithHzb(const glm::dvec3& eye, std::span<const uint32_t> draw_list,
+                   std::span<const uint32_t> parametric_list, FrameStats& stats);
+  void drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
+                      const std::vector<uint32_t>& draw_list, FrameStats& stats);
+  void finishFrame(std::chrono::steady_clock::time_point frame_start, FrameStats& stats);
   // Appends one draw item per cluster (resident, from the cut) seen from `eye`.
   void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                    std::vector<DrawItem>& items) const;

@@ -1,7 +1,7 @@
 // `terawalk bench`: the end-to-end benchmark suite. Generates plants of several sizes (cached
 // between runs), preprocesses each one, replays the standard camera paths in every runtime mode,
 // measures fidelity against the brute-force reference, and writes results.json, report.md, gnuplot
-// plots and sample frames (docs/benchmarks.md, "terawalk bench"). Every run is a child process of
+// plots and sample frames (docs/bench.md). Every run is a child process of
 // this executable (child_process.h), so each figure belongs to one run alone.
 #include <algorithm>
 #include <chrono>
@@ -239,40 +239,54 @@ double medianOf(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-void runBench(const BenchOptions& o, const GlobalOptions& global) {
-  if (!o.report_only.empty()) {
-    const json results = readJson(o.report_only);
-    if (!results.contains("models") || !results.contains("configuration"))
-      throw std::runtime_error(o.report_only + ": not a terawalk bench results.json");
-    fs::create_directories(o.out_dir);
-    writeBenchReport(results, o.out_dir);
-    if (!o.compare.empty())
-      std::printf("%s", compareBenchResults(readJson(o.compare), results).c_str());
-    return;
-  }
-  const auto started = std::chrono::steady_clock::now();
-  const std::vector<std::string> size_names =
-      splitList(!o.sizes.empty() ? o.sizes : (o.quick ? "100K,300K" : "1M,10M,50M"));
+// A bench run's resolved configuration: the options with the defaults of the mode filled in.
+struct BenchPlan {
+  std::vector<std::string> size_names;
   std::vector<uint64_t> sizes;
-  for (const std::string& s : size_names) sizes.push_back(parseCount(s));
-  const int runs = o.runs > 0 ? o.runs : (o.quick ? 1 : 3);
-  const double fps = o.fps > 0.0 ? o.fps : (o.quick ? 0.2 : 2.0);
-  const double walk_fps = o.walk_fps >= 0.0 ? o.walk_fps : (o.quick ? 0.0 : 10.0);
-  const int orbit_frames = o.orbit_frames > 0 ? o.orbit_frames : (o.quick ? 8 : 120);
+  int runs = 3;
+  double fps = 2.0;
+  double walk_fps = 10.0;
+  int orbit_frames = 120;
+  std::string size_text;
+  fs::path out_dir, work, cache, paths_dir;
+  bool keep_frames = false;
+  bool quiet = false;
+
+  void say(const std::string& text) const {
+    if (!quiet) std::fprintf(stderr, "bench: %s\n", text.c_str());
+  }
+};
+
+BenchPlan planBench(const BenchOptions& o, const GlobalOptions& global) {
+  BenchPlan plan;
+  plan.size_names = splitList(!o.sizes.empty() ? o.sizes : (o.quick ? "100K,300K" : "1M,10M,50M"));
+  for (const std::string& s : plan.size_names) plan.sizes.push_back(parseCount(s));
+  plan.runs = o.runs > 0 ? o.runs : (o.quick ? 1 : 3);
+  plan.fps = o.fps > 0.0 ? o.fps : (o.quick ? 0.2 : 2.0);
+  plan.walk_fps = o.walk_fps >= 0.0 ? o.walk_fps : (o.quick ? 0.0 : 10.0);
+  plan.orbit_frames = o.orbit_frames > 0 ? o.orbit_frames : (o.quick ? 8 : 120);
   int width = o.quick ? 320 : 1280, height = o.quick ? 180 : 720;
   if (!o.image_size.empty()) parseImageSize(o.image_size, "--size", width, height);
-  const std::string size_text = std::to_string(width) + "x" + std::to_string(height);
-  const fs::path out_dir = o.out_dir;
-  const fs::path work = out_dir / "work";
-  const fs::path cache = o.cache_dir.empty() ? defaultCacheDir() : fs::path(o.cache_dir);
-  const fs::path paths_dir = findPathsDir(o.paths_dir);
-  fs::create_directories(work);
-  fs::create_directories(cache);
-  fs::create_directories(out_dir / "samples");
-  auto say = [&](const std::string& text) {
-    if (!global.quiet) std::fprintf(stderr, "bench: %s\n", text.c_str());
-  };
+  plan.size_text = std::to_string(width) + "x" + std::to_string(height);
+  plan.out_dir = o.out_dir;
+  plan.work = plan.out_dir / "work";
+  plan.cache = o.cache_dir.empty() ? defaultCacheDir() : fs::path(o.cache_dir);
+  plan.paths_dir = findPathsDir(o.paths_dir);
+  plan.keep_frames = o.keep_frames;
+  plan.quiet = global.quiet;
+  fs::create_directories(plan.work);
+  fs::create_directories(plan.cache);
+  fs::create_directories(plan.out_dir / "samples");
+  return plan;
+}
 
+json resultsHeader(const BenchPlan& plan, const BenchOptions& o) {
+  const auto& size_names = plan.size_names;
+  const int runs = plan.runs;
+  const double fps = plan.fps, walk_fps = plan.walk_fps;
+  const int orbit_frames = plan.orbit_frames;
+  const std::string& size_text = plan.size_text;
+  const fs::path& paths_dir = plan.paths_dir;
   json results = {
       {"schema", "terawalk-bench-1"},
       {"started_utc", utcNow()},
@@ -299,140 +313,182 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
     if (m.walks) results["configuration"]["walk_modes"].push_back(m.name);
   }
 
-  for (size_t si = 0; si < sizes.size(); ++si) {
-    const std::string name = size_names[si];
-    json model = {{"size", name}, {"target_triangles", sizes[si]}};
-    // 1. The plant, cached by size and seed.
-    const fs::path tws = cache / ("plant-" + name + ".tws");
-    if (!fs::exists(tws)) {
-      say("generating the " + name + " plant");
-      const fs::path partial = cache / ("plant-" + name + ".partial.tws");
-      runVerb({"-q", "gen", "plant", "--triangles", name, "--seed", "1", "--no-db", "-o",
-               partial.string()},
-              work / ("gen-" + name + ".log"));
-      fs::rename(partial, tws);
-    }
-    // 2. Preprocess, measured.
-    say("preprocessing the " + name + " plant");
-    const fs::path twk = work / ("plant-" + name + ".twk");
-    const fs::path pre_log = work / ("preprocess-" + name + ".log");
-    ChildResult pre = runVerb({"preprocess", tws.string(), "-o", twk.string()}, pre_log);
-    json prep = parsePreprocessLog(readText(pre_log));
-    prep["wall_s"] = pre.wall_s;
-    prep["cpu_s"] = pre.user_s + pre.system_s;
-    prep["peak_rss_bytes"] = pre.peak_rss_bytes;
-    const double input = prep.value("input_triangles", 0.0);
-    prep["input_triangles_per_s"] = pre.wall_s > 0 ? input / pre.wall_s : 0.0;
-    model["preprocess"] = prep;
+  return results;
+}
 
-    // 3. Paths: the two walks from data/paths and an orbit generated around this model.
-    const fs::path orbit = work / ("orbit-" + name + ".path");
-    // Its keys are spaced for the replay's rate, so the replay renders all orbit_frames of it.
-    runVerb({"-q", "render", twk.string(), "--orbit", std::to_string(orbit_frames), "--fps",
-             std::to_string(fps), "--save-path", orbit.string(), "--max-frames", "1", "--size",
-             "64x36"},
-            work / ("orbit-" + name + ".log"));
-    const std::vector<std::pair<std::string, fs::path>> paths = {
-        {"decks", paths_dir / "plant-decks.path"},
-        {"rack", paths_dir / "plant-rack.path"},
-        {"orbit", orbit}};
-    json path_results = json::object();
-    for (const auto& [path_name, path_file] : paths) {
-      json per_mode = json::object();
-      std::map<std::string, std::vector<json>> summaries;
-      for (int run = 1; run <= runs; ++run) {
-        for (const Mode& mode : modes()) {
-          say(name + " " + path_name + " " + mode.name + " run " + std::to_string(run));
-          const fs::path dir =
-              work / name / path_name / (std::string(mode.name) + "-" + std::to_string(run));
-          fs::remove_all(dir);
-          fs::create_directories(dir.parent_path());
-          std::vector<std::string> args = {"-q",     "render", twk.string(), "--path",
-                                           path_file.string(), "--fps", std::to_string(fps),
-                                           "--size", size_text, "--out", dir.string()};
-          args.insert(args.end(), mode.flags.begin(), mode.flags.end());
-          // As an interactive walkthrough moves between recorded frames.
-          const bool walked_path =
-              std::find(kWalkPaths.begin(), kWalkPaths.end(), path_name) != kWalkPaths.end();
-          if (mode.walks && walk_fps > fps && walked_path) {
-            args.push_back("--walk-fps");
-            args.push_back(std::to_string(walk_fps));
-          }
-          // The first run also keeps frames for fidelity and measures occlusion's pixel loss.
-          if (run == 1) {
-            args.push_back("--png");
-            if (std::string(mode.name).find("occlusion") != std::string::npos ||
-                std::string(mode.name) == "default")
-              args.push_back("--check-occlusion");
-          }
-          runVerb(args, dir.string() + ".log");
-          summaries[mode.name].push_back(readJson(dir / "summary.json"));
-          if (run == 1) per_mode[mode.name]["series"] = frameSeries(dir / "frames.json");
-        }
-      }
-      for (const Mode& mode : modes()) {
-        json& m = per_mode[mode.name];
-        const auto& rows = summaries[mode.name];
-        for (const char* key : {"median_frame_ms", "median_gpu_ms", "median_triangles",
-                                "median_all_triangles", "first_frame_ms", "peak_rss_bytes",
-                                "median_cpu_cut_ms"}) {
-          std::vector<double> values;
-          for (const json& r : rows)
-            if (r.contains(key) && r[key].is_number()) values.push_back(r[key].get<double>());
-          m[key] = medianOf(values);
-          m[std::string(key) + "_runs"] = values;
-        }
-        m["frames"] = rows.front().value("frames", 0);
-        m["walk_frames"] = rows.front().value("walk_frames", 0);
-        if (rows.front().contains("occlusion_lost_share"))
-          m["occlusion_lost_share"] = rows.front()["occlusion_lost_share"];
-        if (!results["machine"].contains("renderer") && rows.front().contains("renderer"))
-          results["machine"]["renderer"] = rows.front()["renderer"];
-        // 4. Fidelity against the reference frames of the first run.
-        if (std::string(mode.name) == "reference") continue;
-        const fs::path ref_dir = work / name / path_name / "reference-1";
-        const fs::path mode_dir = work / name / path_name / (std::string(mode.name) + "-1");
-        const fs::path diff_dir = work / name / path_name / (std::string(mode.name) + "-diff");
-        const fs::path compare_log = diff_dir.string() + ".json";
-        runVerb({"-q", "compare", ref_dir.string(), mode_dir.string(), "--out", diff_dir.string(),
-                 "--json"},
-                compare_log);
-        const json cmp = readJson(compare_log);
-        m["fidelity"] = cmp.contains("summary") ? cmp["summary"] : cmp;
-      }
-      path_results[path_name] = per_mode;
-      // 5. Sample frames of the largest model: reference, default and their diff, side by side.
-      if (si + 1 == sizes.size()) {
-        const fs::path ref_dir = work / name / path_name / "reference-1";
-        const int frames = per_mode["reference"].value("frames", 0);
-        for (int k : {frames / 4, frames / 2, (3 * frames) / 4}) {
-          char file[32];
-          std::snprintf(file, sizeof(file), "%05d.png", k);
-          const std::string base = path_name + "-" + file;
-          auto copy = [&](const fs::path& from, const std::string& to) {
-            if (fs::exists(from))
-              fs::copy_file(from, out_dir / "samples" / to, fs::copy_options::overwrite_existing);
-          };
-          copy(ref_dir / ("frame_" + std::string(file)), "reference-" + base);
-          copy(work / name / path_name / "default-1" / ("frame_" + std::string(file)),
-               "default-" + base);
-          copy(work / name / path_name / "default-diff" / ("diff_" + std::string(file)),
-               "diff-" + base);
-        }
-      }
-      // Frames are large: keep only the samples unless asked.
-      if (!o.keep_frames)
-        for (const auto& entry : fs::directory_iterator(work / name / path_name))
-          if (entry.is_directory())
-            for (const auto& f : fs::directory_iterator(entry.path()))
-              if (f.path().extension() == ".png") fs::remove(f.path());
-    }
-    model["paths"] = path_results;
-    results["models"].push_back(model);
+// 1. The plant, cached by size and seed.
+fs::path cachedPlant(const BenchPlan& plan, const std::string& name) {
+  const fs::path tws = plan.cache / ("plant-" + name + ".tws");
+  if (!fs::exists(tws)) {
+    plan.say("generating the " + name + " plant");
+    const fs::path partial = plan.cache / ("plant-" + name + ".partial.tws");
+    runVerb({"-q", "gen", "plant", "--triangles", name, "--seed", "1", "--no-db", "-o",
+             partial.string()},
+            plan.work / ("gen-" + name + ".log"));
+    fs::rename(partial, tws);
   }
-  results["total_s"] =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  return tws;
+}
 
+// 2. Preprocess, measured: the child's wall time, CPU time and peak RSS, and its own summary.
+json preprocessPlant(const BenchPlan& plan, const std::string& name, const fs::path& tws,
+                     const fs::path& twk) {
+  plan.say("preprocessing the " + name + " plant");
+  const fs::path pre_log = plan.work / ("preprocess-" + name + ".log");
+  ChildResult pre = runVerb({"preprocess", tws.string(), "-o", twk.string()}, pre_log);
+  json prep = parsePreprocessLog(readText(pre_log));
+  prep["wall_s"] = pre.wall_s;
+  prep["cpu_s"] = pre.user_s + pre.system_s;
+  prep["peak_rss_bytes"] = pre.peak_rss_bytes;
+  const double input = prep.value("input_triangles", 0.0);
+  prep["input_triangles_per_s"] = pre.wall_s > 0 ? input / pre.wall_s : 0.0;
+  return prep;
+}
+
+// 3. Every mode along one path, the modes alternating run after run; each run's summary.
+std::map<std::string, std::vector<json>> renderModes(const BenchPlan& plan, const std::string& name,
+                                                     const fs::path& twk,
+                                                     const std::string& path_name,
+                                                     const fs::path& path_file, json& per_mode) {
+  const int runs = plan.runs;
+  const double fps = plan.fps, walk_fps = plan.walk_fps;
+  const std::string& size_text = plan.size_text;
+  std::map<std::string, std::vector<json>> summaries;
+  for (int run = 1; run <= runs; ++run) {
+    for (const Mode& mode : modes()) {
+      plan.say(name + " " + path_name + " " + mode.name + " run " + std::to_string(run));
+      const fs::path dir =
+          plan.work / name / path_name / (std::string(mode.name) + "-" + std::to_string(run));
+      fs::remove_all(dir);
+      fs::create_directories(dir.parent_path());
+      std::vector<std::string> args = {"-q",     "render", twk.string(), "--path",
+                                       path_file.string(), "--fps", std::to_string(fps),
+                                       "--size", size_text, "--out", dir.string()};
+      args.insert(args.end(), mode.flags.begin(), mode.flags.end());
+      // As an interactive walkthrough moves between recorded frames.
+      const bool walked_path =
+          std::find(kWalkPaths.begin(), kWalkPaths.end(), path_name) != kWalkPaths.end();
+      if (mode.walks && walk_fps > fps && walked_path) {
+        args.push_back("--walk-fps");
+        args.push_back(std::to_string(walk_fps));
+      }
+      // The first run also keeps frames for fidelity and measures occlusion's pixel loss.
+      if (run == 1) {
+        args.push_back("--png");
+        if (std::string(mode.name).find("occlusion") != std::string::npos ||
+            std::string(mode.name) == "default")
+          args.push_back("--check-occlusion");
+      }
+      runVerb(args, dir.string() + ".log");
+      summaries[mode.name].push_back(readJson(dir / "summary.json"));
+      if (run == 1) per_mode[mode.name]["series"] = frameSeries(dir / "frames.json");
+    }
+  }
+  return summaries;
+}
+
+// Medians over the runs, and 4. fidelity against the reference frames of the first run.
+void summarizeModes(const BenchPlan& plan, const std::string& name, const std::string& path_name,
+                    const std::map<std::string, std::vector<json>>& summaries, json& per_mode,
+                    json& results) {
+  const fs::path& work = plan.work;
+  for (const Mode& mode : modes()) {
+    json& m = per_mode[mode.name];
+    const auto& rows = summaries.at(mode.name);
+    for (const char* key : {"median_frame_ms", "median_gpu_ms", "median_triangles",
+                            "median_all_triangles", "first_frame_ms", "peak_rss_bytes",
+                            "median_cpu_cut_ms"}) {
+      std::vector<double> values;
+      for (const json& r : rows)
+        if (r.contains(key) && r[key].is_number()) values.push_back(r[key].get<double>());
+      m[key] = medianOf(values);
+      m[std::string(key) + "_runs"] = values;
+    }
+    m["frames"] = rows.front().value("frames", 0);
+    m["walk_frames"] = rows.front().value("walk_frames", 0);
+    if (rows.front().contains("occlusion_lost_share"))
+      m["occlusion_lost_share"] = rows.front()["occlusion_lost_share"];
+    if (!results["machine"].contains("renderer") && rows.front().contains("renderer"))
+      results["machine"]["renderer"] = rows.front()["renderer"];
+    // 4. Fidelity against the reference frames of the first run.
+    if (std::string(mode.name) == "reference") continue;
+    const fs::path ref_dir = work / name / path_name / "reference-1";
+    const fs::path mode_dir = work / name / path_name / (std::string(mode.name) + "-1");
+    const fs::path diff_dir = work / name / path_name / (std::string(mode.name) + "-diff");
+    const fs::path compare_log = diff_dir.string() + ".json";
+    runVerb({"-q", "compare", ref_dir.string(), mode_dir.string(), "--out", diff_dir.string(),
+             "--json"},
+            compare_log);
+    const json cmp = readJson(compare_log);
+    m["fidelity"] = cmp.contains("summary") ? cmp["summary"] : cmp;
+  }
+}
+
+// 5. Sample frames of the largest model: reference, default and their diff, side by side.
+void copySamples(const BenchPlan& plan, const std::string& name, const std::string& path_name,
+                 const json& per_mode) {
+  const fs::path& work = plan.work;
+  const fs::path& out_dir = plan.out_dir;
+  const fs::path ref_dir = work / name / path_name / "reference-1";
+  const int frames = per_mode.at("reference").value("frames", 0);
+  for (int k : {frames / 4, frames / 2, (3 * frames) / 4}) {
+    char file[32];
+    std::snprintf(file, sizeof(file), "%05d.png", k);
+    const std::string base = path_name + "-" + file;
+    auto copy = [&](const fs::path& from, const std::string& to) {
+      if (fs::exists(from))
+        fs::copy_file(from, out_dir / "samples" / to, fs::copy_options::overwrite_existing);
+    };
+    copy(ref_dir / ("frame_" + std::string(file)), "reference-" + base);
+    copy(work / name / path_name / "default-1" / ("frame_" + std::string(file)),
+         "default-" + base);
+    copy(work / name / path_name / "default-diff" / ("diff_" + std::string(file)),
+         "diff-" + base);
+  }
+}
+
+// Frames are large: keep only the samples unless asked.
+void removeFrames(const BenchPlan& plan, const std::string& name, const std::string& path_name) {
+  if (plan.keep_frames) return;
+  for (const auto& entry : fs::directory_iterator(plan.work / name / path_name))
+    if (entry.is_directory())
+      for (const auto& f : fs::directory_iterator(entry.path()))
+        if (f.path().extension() == ".png") fs::remove(f.path());
+}
+
+// One plant: generated (or cached), preprocessed, and its three paths rendered in every mode.
+json benchModel(const BenchPlan& plan, size_t index, json& results) {
+  const std::string& name = plan.size_names[index];
+  json model = {{"size", name}, {"target_triangles", plan.sizes[index]}};
+  const fs::path tws = cachedPlant(plan, name);
+  const fs::path twk = plan.work / ("plant-" + name + ".twk");
+  model["preprocess"] = preprocessPlant(plan, name, tws, twk);
+
+  // The two walks from data/paths and an orbit generated around this model. The orbit's keys are
+  // spaced for the replay's rate, so the replay renders all orbit_frames of it.
+  const fs::path orbit = plan.work / ("orbit-" + name + ".path");
+  runVerb({"-q", "render", twk.string(), "--orbit", std::to_string(plan.orbit_frames), "--fps",
+           std::to_string(plan.fps), "--save-path", orbit.string(), "--max-frames", "1",
+           "--size", "64x36"},
+          plan.work / ("orbit-" + name + ".log"));
+  const std::vector<std::pair<std::string, fs::path>> paths = {
+      {"decks", plan.paths_dir / "plant-decks.path"},
+      {"rack", plan.paths_dir / "plant-rack.path"},
+      {"orbit", orbit}};
+  json path_results = json::object();
+  for (const auto& [path_name, path_file] : paths) {
+    json per_mode = json::object();
+    const auto summaries = renderModes(plan, name, twk, path_name, path_file, per_mode);
+    summarizeModes(plan, name, path_name, summaries, per_mode, results);
+    path_results[path_name] = per_mode;
+    if (index + 1 == plan.sizes.size()) copySamples(plan, name, path_name, per_mode);
+    removeFrames(plan, name, path_name);
+  }
+  model["paths"] = path_results;
+  return model;
+}
+
+void writeResults(const json& results, const fs::path& out_dir) {
   const fs::path results_file = out_dir / "results.json";
   {
     std::ofstream out(results_file);
@@ -442,6 +498,32 @@ void runBench(const BenchOptions& o, const GlobalOptions& global) {
   writeBenchReport(results, out_dir);
   std::printf("bench: %s and report.md written in %.0f s\n", results_file.string().c_str(),
               results.value("total_s", 0.0));
+}
+
+// --report-only: the report (and, with --compare, the ratios) of a saved run.
+void reportSavedRun(const BenchOptions& o) {
+  const json results = readJson(o.report_only);
+  if (!results.contains("models") || !results.contains("configuration"))
+    throw std::runtime_error(o.report_only + ": not a terawalk bench results.json");
+  fs::create_directories(o.out_dir);
+  writeBenchReport(results, o.out_dir);
+  if (!o.compare.empty())
+    std::printf("%s", compareBenchResults(readJson(o.compare), results).c_str());
+}
+
+void runBench(const BenchOptions& o, const GlobalOptions& global) {
+  if (!o.report_only.empty()) {
+    reportSavedRun(o);
+    return;
+  }
+  const auto started = std::chrono::steady_clock::now();
+  const BenchPlan plan = planBench(o, global);
+  json results = resultsHeader(plan, o);
+  for (size_t i = 0; i < plan.sizes.size(); ++i)
+    results["models"].push_back(benchModel(plan, i, results));
+  results["total_s"] =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  writeResults(results, plan.out_dir);
   if (!o.compare.empty()) std::printf("%s", compareBenchResults(readJson(o.compare), results).c_str());
 }
 

@@ -83,14 +83,9 @@ std::string plot(const fs::path& gnuplot, const fs::path& dir, const std::string
   return r.exit_code == 0 && fs::exists(dir / (name + ".png")) ? name + ".png" : std::string();
 }
 
-}  // namespace
-
-void writeBenchReport(const json& results, const fs::path& out_dir) {
-  const fs::path plots = out_dir / "plots";
-  fs::create_directories(plots);
-  const json& models = results.at("models");
+// The run: when, where, on which machine, and with which configuration.
+void writeRunHeader(std::ostringstream& md, const json& results) {
   const json& config = results.at("configuration");
-  std::ostringstream md;
   md << "# TeraWalk benchmark report\n\n";
   md << "- started " << results.value("started_utc", "?") << ", total "
      << fmt(results.value("total_s", 0.0), 0) << " s, commit `" << results.value("commit", "?")
@@ -114,7 +109,10 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
   md << ", orbit " << config.value("orbit_frames", 0) << " frames"
      << (config.value("quick", false) ? ", --quick" : "") << "\n\n";
 
-  // Preprocessing.
+}
+
+// Preprocessing: one row a plant, then its time per stage. Returns the stages' names, in order.
+std::vector<std::string> writePreprocessTables(std::ostringstream& md, const json& models) {
   md << "## Preprocessing\n\n| plant | input triangles | wall s | CPU s | peak RSS MiB | input "
         "triangles/s | bytes/input triangle | levels |\n|---|---|---|---|---|---|---|---|\n";
   std::vector<std::string> stages;
@@ -141,8 +139,13 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
     md << "\n";
   }
 
-  // Replays.
-  const std::vector<std::string> path_names = config.at("paths").get<std::vector<std::string>>();
+  return stages;
+}
+
+// One table a path: each plant's modes, their frame times, triangles and fidelity, then what the
+// reference's frames show.
+void writePathTables(std::ostringstream& md, const json& models,
+                     const std::vector<std::string>& path_names) {
   for (const std::string& path : path_names) {
     md << "\n## Path `" << path << "`\n\n| plant | mode | median frame ms | median GPU ms | "
           "median triangles (mesh + parametric) | first frame ms | peak RSS MiB | match vs reference | occlusion "
@@ -189,9 +192,15 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
     }
   }
 
-  // Plots.
-  const fs::path gnuplot = findGnuplot();
+}
+
+// gnuplot plots of the largest plant's frame times, frame time against size, preprocess time and
+// memory, and the stages. Returns each plot's file and caption; none without gnuplot.
+std::vector<std::pair<std::string, std::string>> writePlots(
+    const fs::path& plots, const json& models, const std::vector<std::string>& path_names,
+    const std::vector<std::string>& stages) {
   std::vector<std::pair<std::string, std::string>> made;  // png, caption
+  const fs::path gnuplot = findGnuplot();
   if (!gnuplot.empty() && !models.empty()) {
     const json& largest = models.back();
     for (const std::string& path : path_names) {
@@ -284,11 +293,10 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
       if (!png.empty()) made.push_back({png, "Preprocess time per stage"});
     }
   }
-  md << "\n## Plots\n\n";
-  if (gnuplot.empty())
-    md << "gnuplot was not found on PATH (Debian package gnuplot-nox): no plots.\n";
-  for (const auto& [png, caption] : made) md << caption << ":\n\n![" << caption << "](plots/" << png << ")\n\n";
+  return made;
+}
 
+void writeSampleFrames(std::ostringstream& md, const fs::path& out_dir) {
   md << "## Sample frames\n\nReference, full default and their difference (magenta: other object, "
         "red: colour) for the largest plant:\n\n";
   if (fs::is_directory(out_dir / "samples"))
@@ -298,6 +306,26 @@ void writeBenchReport(const json& results, const fs::path& out_dir) {
         md << "`" << rest << "`: ![reference](samples/reference-" << rest
            << ") ![default](samples/default-" << rest << ") ![diff](samples/diff-" << rest << ")\n\n";
       }
+}
+
+}  // namespace
+
+void writeBenchReport(const json& results, const fs::path& out_dir) {
+  const fs::path plots = out_dir / "plots";
+  fs::create_directories(plots);
+  const json& models = results.at("models");
+  const std::vector<std::string> path_names =
+      results.at("configuration").at("paths").get<std::vector<std::string>>();
+  std::ostringstream md;
+  writeRunHeader(md, results);
+  const std::vector<std::string> stages = writePreprocessTables(md, models);
+  writePathTables(md, models, path_names);
+  const auto made = writePlots(plots, models, path_names, stages);
+  md << "\n## Plots\n\n";
+  if (findGnuplot().empty())
+    md << "gnuplot was not found on PATH (Debian package gnuplot-nox): no plots.\n";
+  for (const auto& [png, caption] : made) md << caption << ":\n\n![" << caption << "](plots/" << png << ")\n\n";
+  writeSampleFrames(md, out_dir);
   writeFile(out_dir / "report.md", md.str());
 }
 

@@ -76,10 +76,13 @@ void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint
   writePngRgba(dir / name, renderer.width(), renderer.height(), idsToRgba(ids));
 }
 
-void runRender(const RenderArgs& args, const GlobalOptions& global) {
-  using Clock = std::chrono::steady_clock;
-  int width = 0, height = 0;
-  parseImageSize(args.size, "--size", width, height);
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+void validateArgs(const RenderArgs& args) {
   if (!(args.fps > 0.0)) throw std::runtime_error("--fps must be positive");
   if (!(args.walk_fps >= 0.0)) throw std::runtime_error("--walk-fps must not be negative");
   const int path_sources =
@@ -87,14 +90,9 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   if (path_sources != 1)
     throw std::runtime_error("give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES");
   if (args.png && args.out_dir.empty()) throw std::runtime_error("--png needs --out DIR");
-  const std::filesystem::path out_dir = args.out_dir;
-  if (!out_dir.empty()) std::filesystem::create_directories(out_dir);
+}
 
-  const auto start = Clock::now();
-  EglContext context;
-  const double context_ms =
-      std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-
+WalkthroughOptions walkthroughOptions(const RenderArgs& args, int width, int height) {
   WalkthroughOptions options;
   options.width = width;
   options.height = height;
@@ -126,90 +124,149 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   options.pager.upload_bytes_per_frame = static_cast<uint64_t>(args.upload_mb * 1024 * 1024);
   options.pager.loader_threads = args.loader_threads;
   options.pager.evict_after_frames = args.evict_after;
-  const auto open_start = Clock::now();
-  Walkthrough walk(args.file, options);
-  const double open_ms =
-      std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
+  return options;
+}
 
-  Aabb bounds;
-  bounds.add(walk.worldMin());
-  bounds.add(walk.worldMax());
+// The camera path from --path, or an orbit or fly-through around the model's bounds; written to
+// --save-path when asked.
+CameraPath cameraPath(const RenderArgs& args, const Aabb& bounds) {
   CameraPath path;
   if (!args.path_file.empty()) path = readCameraPath(args.path_file);
   else if (args.orbit_frames > 0) path = generateOrbitPath(bounds, args.orbit_frames, args.fps);
   else path = generateFlythroughPath(bounds, args.flythrough_frames, args.fps);
   if (path.keys.empty()) throw std::runtime_error("the camera path has no key frames");
   if (!args.save_path.empty()) writeCameraPath(path, args.save_path);
+  return path;
+}
 
+// --check-occlusion: each frame's cut drawn again without occlusion culling, and the pixels whose
+// object id (or depth) differs counted, frame by frame and in total.
+class OcclusionLossCheck {
+ public:
+  void check(Walkthrough& walk, FrameStats& stats) {
+    walk.renderer().readObjectIds(culled_ids_, false);
+    walk.renderer().readDepth(culled_depth_, false);
+    walk.redrawUnculled();
+    walk.renderer().readObjectIds(unculled_ids_, false);
+    walk.renderer().readDepth(unculled_depth_, false);
+    uint64_t lost = 0, lost_depth = 0;
+    for (size_t p = 0; p < culled_ids_.size(); ++p) {
+      const bool id_differs = culled_ids_[p] != unculled_ids_[p];
+      lost += id_differs;
+      lost_depth += id_differs || culled_depth_[p] != unculled_depth_[p];
+    }
+    stats.occlusion_lost_px = int64_t(lost);
+    stats.occlusion_lost_depth_px = int64_t(lost_depth);
+    lost_depth_px_total_ += lost_depth;
+    stats.occlusion_lost_share = culled_ids_.empty() ? 0.0 : double(lost) / culled_ids_.size();
+    lost_px_total_ += lost;
+    checked_px_total_ += culled_ids_.size();
+  }
+
+  // The totals into the summary, and a line on stderr.
+  void summarize(const RenderArgs& args, const std::vector<FrameStats>& all,
+                 nlohmann::json& summary) const {
+    uint64_t lossy_frames = 0;
+    double max_lost_share = 0.0;
+    for (const FrameStats& f : all) {
+      lossy_frames += f.occlusion_lost_px > 0;
+      max_lost_share = std::max(max_lost_share, f.occlusion_lost_share);
+    }
+    const int frames = int(all.size());
+    const double share = checked_px_total_ ? double(lost_px_total_) / double(checked_px_total_) : 0.0;
+    summary["occlusion_lost_px_total"] = lost_px_total_;
+    summary["occlusion_checked_px_total"] = checked_px_total_;
+    summary["occlusion_lost_share"] = share;
+    summary["occlusion_max_frame_lost_share"] = max_lost_share;
+    summary["occlusion_frames_with_loss"] = lossy_frames;
+    summary["occlusion_lost_depth_px_total"] = lost_depth_px_total_;
+    summary["occlusion_lost_depth_share"] =
+        checked_px_total_ ? double(lost_depth_px_total_) / double(checked_px_total_) : 0.0;
+    std::fprintf(stderr,
+                 "render: occlusion %s lost %llu of %llu pixels (%.6f%%) over %d frames; "
+                 "worst frame %.6f%%, %llu frames with loss; id or depth differs: %llu pixels\n",
+                 args.occlusion.c_str(), static_cast<unsigned long long>(lost_px_total_),
+                 static_cast<unsigned long long>(checked_px_total_), 100.0 * share, frames,
+                 100.0 * max_lost_share, static_cast<unsigned long long>(lossy_frames),
+                 static_cast<unsigned long long>(lost_depth_px_total_));
+  }
+
+ private:
+  std::vector<uint32_t> culled_ids_, unculled_ids_;
+  std::vector<float> culled_depth_, unculled_depth_;
+  uint64_t lost_px_total_ = 0, checked_px_total_ = 0, lost_depth_px_total_ = 0;
+};
+
+// What rendering the path gave: the recorded frames' statistics and the walk between them.
+struct RenderedPath {
+  std::vector<FrameStats> frames;
+  uint64_t walk_frames = 0;
+  int walk_steps = 1;
+  double first_frame_ms = 0.0;  // from opening the package to the first recorded frame
+};
+
+RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Walkthrough& walk,
+                        const CameraPath& path, const Aabb& bounds, Clock::time_point open_start,
+                        OcclusionLossCheck& occlusion_check) {
   Camera base;
   const double diagonal = glm::length(bounds.max - bounds.min);
   base.near_m = 0.05;
   base.far_m = std::max(100.0, 10.0 * diagonal);
   int frames = static_cast<int>(std::floor(path.durationS() * args.fps + 1e-9)) + 1;
   if (args.max_frames > 0) frames = std::min(frames, args.max_frames);
+  RenderedPath rendered;
   // --walk-fps: steps per recorded frame, so the recorded frames keep their times exactly.
-  const int walk_steps = std::max(1, int(std::lround(args.walk_fps / args.fps)));
-  uint64_t walk_frames = 0;
-
-  std::vector<FrameStats> all;
-  all.reserve(frames);
+  rendered.walk_steps = std::max(1, int(std::lround(args.walk_fps / args.fps)));
+  rendered.frames.reserve(frames);
+  const std::filesystem::path out_dir = args.out_dir;
   std::vector<uint8_t> rgba;
-  std::vector<uint32_t> ids, culled_ids, unculled_ids;
-  std::vector<float> culled_depth, unculled_depth;
-  uint64_t lost_px_total = 0, checked_px_total = 0, lost_depth_px_total = 0;
-  double first_frame_ms = 0.0;
+  std::vector<uint32_t> ids;
   const double t0 = path.keys.front().time_s;
   for (int i = 0; i < frames; ++i) {
     const double t = t0 + i / args.fps;
     // The camera between the previous recorded frame and this one, rendered and not recorded:
     // the pager, prefetch and occlusion see it move as in an interactive walkthrough.
-    for (int step = 1; i > 0 && step < walk_steps; ++step) {
-      const double walk_t = t0 + (i - 1 + double(step) / walk_steps) / args.fps;
+    for (int step = 1; i > 0 && step < rendered.walk_steps; ++step) {
+      const double walk_t = t0 + (i - 1 + double(step) / rendered.walk_steps) / args.fps;
       walk.renderFrame(path.sample(walk_t, base), walk_t);
-      ++walk_frames;
+      ++rendered.walk_frames;
     }
     FrameStats stats = walk.renderFrame(path.sample(t, base), t);
     stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
-    if (i == 0)
-      first_frame_ms = std::chrono::duration<double, std::milli>(Clock::now() - open_start).count();
+    if (i == 0) rendered.first_frame_ms = msSince(open_start);
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
-    if (args.check_occlusion) {
-      walk.renderer().readObjectIds(culled_ids, false);
-      walk.renderer().readDepth(culled_depth, false);
-      walk.redrawUnculled();
-      walk.renderer().readObjectIds(unculled_ids, false);
-      walk.renderer().readDepth(unculled_depth, false);
-      uint64_t lost = 0, lost_depth = 0;
-      for (size_t p = 0; p < culled_ids.size(); ++p) {
-        const bool id_differs = culled_ids[p] != unculled_ids[p];
-        lost += id_differs;
-        lost_depth += id_differs || culled_depth[p] != unculled_depth[p];
-      }
-      stats.occlusion_lost_px = int64_t(lost);
-      stats.occlusion_lost_depth_px = int64_t(lost_depth);
-      lost_depth_px_total += lost_depth;
-      stats.occlusion_lost_share = culled_ids.empty() ? 0.0 : double(lost) / culled_ids.size();
-      lost_px_total += lost;
-      checked_px_total += culled_ids.size();
-    }
-    all.push_back(stats);
+    if (args.check_occlusion) occlusion_check.check(walk, stats);
+    rendered.frames.push_back(stats);
     if (!global.quiet && (i % 30 == 0 || i + 1 == frames))
       std::fprintf(stderr, "render: frame %d/%d  %.1f ms  %llu triangles\n", i + 1, frames,
                    stats.frame_ms, static_cast<unsigned long long>(stats.triangles_drawn));
   }
+  return rendered;
+}
 
+struct RenderTimes {
+  double context_ms = 0.0;
+  double open_ms = 0.0;
+};
+
+nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& options,
+                             const EglContext& context, const Walkthrough& walk,
+                             const RenderedPath& rendered, const RenderTimes& times) {
+  const std::vector<FrameStats>& all = rendered.frames;
+  const int frames = int(all.size());
+  const int width = options.width, height = options.height;
+  const double context_ms = times.context_ms, open_ms = times.open_ms;
+  const double first_frame_ms = rendered.first_frame_ms;
+  const uint64_t walk_frames = rendered.walk_frames;
+  const int walk_steps = rendered.walk_steps;
   uint64_t peak_rss = 0, fallback_frames = 0, occlusion_culled_total = 0, cell_frames = 0;
-  uint64_t lossy_frames = 0;
-  double max_lost_share = 0.0;
   for (const FrameStats& f : all) {
     peak_rss = std::max(peak_rss, f.rss_bytes);
     fallback_frames += f.ancestor_fallbacks > 0;
     occlusion_culled_total += f.occlusion_culled;
     cell_frames += f.view_cell >= 0;
-    lossy_frames += f.occlusion_lost_px > 0;
-    max_lost_share = std::max(max_lost_share, f.occlusion_lost_share);
   }
-  nlohmann::json summary = {
+  return {
       {"package", args.file},
       {"mode", args.reference ? "reference" : "lod"},
       {"width", width},
@@ -264,33 +321,46 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
       {"host_budget_bytes", options.pager.host_budget_bytes},
       {"renderer", context.renderer()},
   };
-  if (args.check_occlusion) {
-    const double share = checked_px_total ? double(lost_px_total) / double(checked_px_total) : 0.0;
-    summary["occlusion_lost_px_total"] = lost_px_total;
-    summary["occlusion_checked_px_total"] = checked_px_total;
-    summary["occlusion_lost_share"] = share;
-    summary["occlusion_max_frame_lost_share"] = max_lost_share;
-    summary["occlusion_frames_with_loss"] = lossy_frames;
-    summary["occlusion_lost_depth_px_total"] = lost_depth_px_total;
-    summary["occlusion_lost_depth_share"] =
-        checked_px_total ? double(lost_depth_px_total) / double(checked_px_total) : 0.0;
-    std::fprintf(stderr,
-                 "render: occlusion %s lost %llu of %llu pixels (%.6f%%) over %d frames; "
-                 "worst frame %.6f%%, %llu frames with loss; id or depth differs: %llu pixels\n",
-                 args.occlusion.c_str(), static_cast<unsigned long long>(lost_px_total),
-                 static_cast<unsigned long long>(checked_px_total), 100.0 * share, frames,
-                 100.0 * max_lost_share, static_cast<unsigned long long>(lossy_frames),
-                 static_cast<unsigned long long>(lost_depth_px_total));
-  }
-  if (!out_dir.empty()) {
-    writeFrameStatsCsv(all, out_dir / "frames.csv");
-    writeFrameStatsJson(all, out_dir / "frames.json");
-    std::FILE* f = std::fopen((out_dir / "summary.json").string().c_str(), "w");
-    if (!f) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
-    const std::string text = summary.dump(1) + "\n";
-    std::fwrite(text.data(), 1, text.size(), f);
-    std::fclose(f);
-  }
+}
+
+void writeRenderOutputs(const std::filesystem::path& out_dir, const std::vector<FrameStats>& all,
+                        const nlohmann::json& summary) {
+  writeFrameStatsCsv(all, out_dir / "frames.csv");
+  writeFrameStatsJson(all, out_dir / "frames.json");
+  std::FILE* f = std::fopen((out_dir / "summary.json").string().c_str(), "w");
+  if (!f) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
+  const std::string text = summary.dump(1) + "\n";
+  std::fwrite(text.data(), 1, text.size(), f);
+  std::fclose(f);
+}
+
+// Steps: the GL context, the walkthrough over the package, the path rendered frame by frame,
+// the summary printed and, with --out, written beside the frames' statistics.
+void runRender(const RenderArgs& args, const GlobalOptions& global) {
+  int width = 0, height = 0;
+  parseImageSize(args.size, "--size", width, height);
+  validateArgs(args);
+  if (!args.out_dir.empty()) std::filesystem::create_directories(args.out_dir);
+
+  RenderTimes times;
+  const auto start = Clock::now();
+  EglContext context;
+  times.context_ms = msSince(start);
+  const WalkthroughOptions options = walkthroughOptions(args, width, height);
+  const auto open_start = Clock::now();
+  Walkthrough walk(args.file, options);
+  times.open_ms = msSince(open_start);
+
+  Aabb bounds;
+  bounds.add(walk.worldMin());
+  bounds.add(walk.worldMax());
+  const CameraPath path = cameraPath(args, bounds);
+  OcclusionLossCheck occlusion_check;
+  const RenderedPath rendered =
+      renderPath(args, global, walk, path, bounds, open_start, occlusion_check);
+  nlohmann::json summary = renderSummary(args, options, context, walk, rendered, times);
+  if (args.check_occlusion) occlusion_check.summarize(args, rendered.frames, summary);
+  if (!args.out_dir.empty()) writeRenderOutputs(args.out_dir, rendered.frames, summary);
   std::printf("%s\n", summary.dump(1).c_str());
 }
 

@@ -110,186 +110,246 @@ void onScroll(GLFWwindow* window, double, double dy) {
   else nav->speed_mps *= factor;
 }
 
+// The window with a GL 4.5 core context and the ImGui overlay, torn down in reverse order.
+class ViewerWindow {
+ public:
+  ViewerWindow(int width, int height) {
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+    glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+    glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+    glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    window_ = glfwCreateWindow(width, height, "TeraWalk", nullptr, nullptr);
+    if (!window_) throw std::runtime_error("GLFW: cannot create a GL 4.5 core window");
+    glfwMakeContextCurrent(window_);
+    glfwSwapInterval(0);
+    IMGUI_CHECKVERSION();
+    ImGui::CreateContext();
+    ImGui::GetIO().IniFilename = nullptr;
+    ImGui_ImplGlfw_InitForOpenGL(window_, true);
+    ImGui_ImplOpenGL3_Init("#version 450");
+  }
+  ~ViewerWindow() {
+    ImGui_ImplOpenGL3_Shutdown();
+    ImGui_ImplGlfw_Shutdown();
+    ImGui::DestroyContext();
+    glfwDestroyWindow(window_);
+  }
+  ViewerWindow(const ViewerWindow&) = delete;
+  ViewerWindow& operator=(const ViewerWindow&) = delete;
+  GLFWwindow* get() const { return window_; }
+
+ private:
+  GLFWwindow* window_ = nullptr;
+};
+
+// What the panel sets, applied to the camera and the walkthrough before each frame.
+struct ViewSettings {
+  float tau = 1.0f;
+  float fov_deg = 60.0f;
+  float near_m = 0.05f, far_m = 1000.0f;
+  float min_feature = 1.0f;
+  int occlusion_mode = 0;
+  int parametric_mode = 0;
+};
+
+// Keys that act once per press (not while held), unless the overlay has the keyboard.
+class KeyPresses {
+ public:
+  explicit KeyPresses(GLFWwindow* window) : window_(window) {}
+  bool pressed(int key) {
+    const bool down = glfwGetKey(window_, key) == GLFW_PRESS;
+    const bool edge = down && !latch_[key];
+    latch_[key] = down;
+    return edge && !ImGui::GetIO().WantCaptureKeyboard;
+  }
+
+ private:
+  GLFWwindow* window_;
+  bool latch_[512] = {};
+};
+
+// The camera-path recorder (R starts and stops): keys at the frames' times, written on stop.
+struct PathRecorder {
+  CameraPath path;
+  bool on = false;
+
+  void toggle(const std::string& file) {
+    on = !on;
+    if (!on && !path.keys.empty()) {
+      writeCameraPath(path, file);
+      std::fprintf(stderr, "view: recorded %zu keys to %s\n", path.keys.size(), file.c_str());
+    }
+    if (on) path.keys.clear();
+  }
+  void add(double t, const Camera& camera) {
+    if (on && (path.keys.empty() || t > path.keys.back().time_s + 1e-3))
+      path.keys.push_back({t, camera});
+  }
+};
+
+// The overlay: the frame's statistics and the settings' controls.
+void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
+               bool recording) {
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::Begin("TeraWalk");
+  ImGui::Text("%.1f ms  (%.0f fps)   cut %.2f ms   gpu %.2f ms", stats.frame_ms,
+              stats.frame_ms > 0 ? 1000.0 / stats.frame_ms : 0.0, stats.cpu_cut_ms, stats.gpu_ms);
+  ImGui::Text("triangles %llu   clusters %u   visited %u",
+              static_cast<unsigned long long>(stats.triangles_drawn), stats.nodes_drawn,
+              stats.nodes_visited);
+  ImGui::Text("pages resident %u  queued %u  loaded %u   fallbacks %u", stats.pages_resident,
+              stats.pages_requested, stats.pages_loaded, stats.ancestor_fallbacks);
+  ImGui::Text("GPU pool %.0f MiB   RSS %.0f MiB", stats.gpu_bytes_used / 1048576.0,
+              stats.rss_bytes / 1048576.0);
+  ImGui::Text("occlusion culled %u   pass1 %u  pass2 %u   occluders %u   cell %lld",
+              stats.occlusion_culled, stats.pass1_clusters, stats.pass2_clusters,
+              stats.occluders_drawn, static_cast<long long>(stats.view_cell));
+  ImGui::Text("HZB build %.2f ms   test %.2f ms", stats.hzb_build_ms, stats.hzb_test_ms);
+  ImGui::Text("parametric clusters %u   instances %llu   mesh triangles %llu   %.2f ms",
+              stats.parametric_clusters_drawn,
+              static_cast<unsigned long long>(stats.parametric_instances_drawn),
+              static_cast<unsigned long long>(stats.parametric_triangles), stats.parametric_cpu_ms);
+  if (stats.parametric_skipped > 0)
+    ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
+                       stats.parametric_skipped);
+  ImGui::SliderFloat("tau (px)", &settings.tau, 0.25f, 64.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderFloat("FOV (deg)", &settings.fov_deg, 20.0f, 120.0f, "%.0f");
+  ImGui::SliderFloat("near (m)", &settings.near_m, 0.01f, 10.0f, "%.2f",
+                     ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderFloat("far (m)", &settings.far_m, 100.0f, 1e6f, "%.0f",
+                     ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderFloat("min feature (px)", &settings.min_feature, 0.0f, 8.0f, "%.1f");
+  static_assert(int(OcclusionMode::Off) == 0 && int(OcclusionMode::Hzb) == 1 &&
+                int(OcclusionMode::Pvs) == 2, "the combo lists the modes in enum order");
+  const char* const occlusion_names[] = {"off", "hzb", "pvs"};
+  ImGui::Combo("occlusion", &settings.occlusion_mode, occlusion_names, 3);
+  static_assert(int(ParametricMode::Impostor) == 0 && int(ParametricMode::Tessellated) == 1 &&
+                int(ParametricMode::Off) == 2, "the combo lists the modes in enum order");
+  const char* const parametric_names[] = {"impostor", "tessellated", "off"};
+  ImGui::Combo("parametrics [P]", &settings.parametric_mode, parametric_names, 3);
+  ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
+              nav.orbit ? "orbit" : "walk", nav.speed_mps, recording ? " (on)" : "");
+  ImGui::End();
+  ImGui::Render();
+  ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+WalkthroughOptions viewOptions(const ViewArgs& args, GLFWwindow* window) {
+  WalkthroughOptions options;
+  glfwGetFramebufferSize(window, &options.width, &options.height);
+  options.tau_px = args.tau_px;
+  options.target_fps = args.target_fps;
+  options.finish_each_frame = false;
+  options.occlusion = parseOcclusionMode(args.occlusion);
+  options.parametrics = parseParametricMode(args.parametrics);
+  options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
+  return options;
+}
+
+// The loop, frame after frame: input, the camera (replayed or navigated), the settings applied,
+// the frame rendered and shown with the overlay on top.
+void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
+                 const WalkthroughOptions& options) {
+  Aabb bounds;
+  bounds.add(walk.worldMin());
+  bounds.add(walk.worldMax());
+  const double diagonal = glm::length(bounds.max - bounds.min);
+  Navigator nav;
+  glfwSetWindowUserPointer(window, &nav);
+  glfwSetScrollCallback(window, onScroll);
+  nav.speed_mps = std::max(1.0, diagonal / 30.0);
+  nav.orbit_target = 0.5 * (bounds.min + bounds.max);
+  nav.orbit_distance = diagonal;
+
+  CameraPath replay;
+  if (!args.path_file.empty()) replay = readCameraPath(args.path_file);
+  Camera camera = generateOrbitPath(bounds, 2).sample(0.0);
+  camera.near_m = 0.05;
+  camera.far_m = std::max(100.0, 10.0 * diagonal);
+  if (!replay.keys.empty()) camera = replay.sample(replay.keys.front().time_s, camera);
+
+  PathRecorder recorder;
+  ViewSettings settings;
+  settings.tau = float(walk.tau());
+  settings.fov_deg = float(glm::degrees(camera.fov_y_rad));
+  settings.near_m = float(camera.near_m);
+  settings.far_m = float(camera.far_m);
+  settings.occlusion_mode = static_cast<int>(options.occlusion);
+  settings.parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
+  int shot = 0;
+  KeyPresses keys(window);
+
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  auto last = start;
+  FrameStats stats;
+  for (int frame = 0; !glfwWindowShouldClose(window); ++frame) {
+    glfwPollEvents();
+    const auto now = Clock::now();
+    const double dt = std::chrono::duration<double>(now - last).count();
+    const double t = std::chrono::duration<double>(now - start).count();
+    last = now;
+
+    if (keys.pressed(GLFW_KEY_O)) {
+      nav.orbit = !nav.orbit;
+      if (nav.orbit) nav.orbit_distance = glm::length(camera.position - nav.orbit_target);
+    }
+    if (keys.pressed(GLFW_KEY_P)) settings.parametric_mode = (settings.parametric_mode + 1) % 3;
+    if (keys.pressed(GLFW_KEY_R)) recorder.toggle(args.record_file);
+    if (keys.pressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window, GLFW_TRUE);
+
+    if (!replay.keys.empty()) {
+      const double span = std::max(replay.durationS(), 1e-6);
+      camera = replay.sample(replay.keys.front().time_s + std::fmod(t, span), camera);
+    } else {
+      nav.update(window, camera, dt);
+    }
+    camera.fov_y_rad = glm::radians(double(settings.fov_deg));
+    camera.near_m = settings.near_m;
+    camera.far_m = settings.far_m;
+    recorder.add(t, camera);
+
+    int fb_w = 0, fb_h = 0;
+    glfwGetFramebufferSize(window, &fb_w, &fb_h);
+    if (fb_w > 0 && fb_h > 0 && (fb_w != walk.renderer().width() || fb_h != walk.renderer().height()))
+      walk.renderer().resize(fb_w, fb_h);
+    if (options.target_fps <= 0.0) walk.setTau(settings.tau);
+    walk.setMinFeaturePx(settings.min_feature);
+    walk.setOcclusion(static_cast<OcclusionMode>(settings.occlusion_mode));
+    walk.setParametrics(static_cast<ParametricMode>(settings.parametric_mode));
+    stats = walk.renderFrame(camera, t);
+    settings.tau = float(walk.tau());
+
+    if (keys.pressed(GLFW_KEY_F12)) {
+      char name[64];
+      std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
+      saveScreenshot(walk.renderer(), name);
+    }
+    walk.renderer().blitToScreen(fb_w, fb_h);
+    drawPanel(stats, settings, nav, recorder.on);
+    glfwSwapBuffers(window);
+
+    if (args.frames > 0 && frame + 1 >= args.frames) {
+      if (!args.screenshot.empty()) saveScreenshot(walk.renderer(), args.screenshot);
+      break;
+    }
+  }
+  if (recorder.on && !recorder.path.keys.empty())
+    writeCameraPath(recorder.path, args.record_file);
+  glfwSetWindowUserPointer(window, nullptr);
+}
+
 void runView(const ViewArgs& args) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
   GlfwSession glfw;
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
-  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
-  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
-  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
-  GLFWwindow* window = glfwCreateWindow(width, height, "TeraWalk", nullptr, nullptr);
-  if (!window) throw std::runtime_error("GLFW: cannot create a GL 4.5 core window");
-  glfwMakeContextCurrent(window);
-  glfwSwapInterval(0);
-
-  IMGUI_CHECKVERSION();
-  ImGui::CreateContext();
-  ImGui::GetIO().IniFilename = nullptr;
-  ImGui_ImplGlfw_InitForOpenGL(window, true);
-  ImGui_ImplOpenGL3_Init("#version 450");
-
-  {
-    WalkthroughOptions options;
-    glfwGetFramebufferSize(window, &options.width, &options.height);
-    options.tau_px = args.tau_px;
-    options.target_fps = args.target_fps;
-    options.finish_each_frame = false;
-    options.occlusion = parseOcclusionMode(args.occlusion);
-    options.parametrics = parseParametricMode(args.parametrics);
-    options.pager.gpu_budget_bytes = parseByteSize(args.gpu_budget, "--gpu-budget");
-    Walkthrough walk(args.file, options);
-
-    Aabb bounds;
-    bounds.add(walk.worldMin());
-    bounds.add(walk.worldMax());
-    const double diagonal = glm::length(bounds.max - bounds.min);
-    Navigator nav;
-    glfwSetWindowUserPointer(window, &nav);
-    glfwSetScrollCallback(window, onScroll);
-    nav.speed_mps = std::max(1.0, diagonal / 30.0);
-    nav.orbit_target = 0.5 * (bounds.min + bounds.max);
-    nav.orbit_distance = diagonal;
-
-    CameraPath replay;
-    if (!args.path_file.empty()) replay = readCameraPath(args.path_file);
-    Camera camera = generateOrbitPath(bounds, 2).sample(0.0);
-    camera.near_m = 0.05;
-    camera.far_m = std::max(100.0, 10.0 * diagonal);
-    if (!replay.keys.empty()) camera = replay.sample(replay.keys.front().time_s, camera);
-
-    CameraPath recording;
-    bool recording_on = false;
-    float tau = float(walk.tau());
-    float fov_deg = float(glm::degrees(camera.fov_y_rad));
-    float near_m = float(camera.near_m), far_m = float(camera.far_m);
-    float min_feature = 1.0f;
-    int occlusion_mode = static_cast<int>(options.occlusion);
-    int parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
-    int shot = 0;
-    bool key_latch[512] = {};
-    auto pressed = [&](int key) {
-      const bool down = glfwGetKey(window, key) == GLFW_PRESS;
-      const bool edge = down && !key_latch[key];
-      key_latch[key] = down;
-      return edge && !ImGui::GetIO().WantCaptureKeyboard;
-    };
-
-    using Clock = std::chrono::steady_clock;
-    const auto start = Clock::now();
-    auto last = start;
-    FrameStats stats;
-    for (int frame = 0; !glfwWindowShouldClose(window); ++frame) {
-      glfwPollEvents();
-      const auto now = Clock::now();
-      const double dt = std::chrono::duration<double>(now - last).count();
-      const double t = std::chrono::duration<double>(now - start).count();
-      last = now;
-
-      if (pressed(GLFW_KEY_O)) {
-        nav.orbit = !nav.orbit;
-        if (nav.orbit) nav.orbit_distance = glm::length(camera.position - nav.orbit_target);
-      }
-      if (pressed(GLFW_KEY_P)) parametric_mode = (parametric_mode + 1) % 3;
-      if (pressed(GLFW_KEY_R)) {
-        recording_on = !recording_on;
-        if (!recording_on && !recording.keys.empty()) {
-          writeCameraPath(recording, args.record_file);
-          std::fprintf(stderr, "view: recorded %zu keys to %s\n", recording.keys.size(),
-                       args.record_file.c_str());
-        }
-        if (recording_on) recording.keys.clear();
-      }
-      if (pressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window, GLFW_TRUE);
-
-      if (!replay.keys.empty()) {
-        const double span = std::max(replay.durationS(), 1e-6);
-        camera = replay.sample(replay.keys.front().time_s + std::fmod(t, span), camera);
-      } else {
-        nav.update(window, camera, dt);
-      }
-      camera.fov_y_rad = glm::radians(double(fov_deg));
-      camera.near_m = near_m;
-      camera.far_m = far_m;
-      if (recording_on && (recording.keys.empty() || t > recording.keys.back().time_s + 1e-3))
-        recording.keys.push_back({t, camera});
-
-      int fb_w = 0, fb_h = 0;
-      glfwGetFramebufferSize(window, &fb_w, &fb_h);
-      if (fb_w > 0 && fb_h > 0 && (fb_w != walk.renderer().width() || fb_h != walk.renderer().height()))
-        walk.renderer().resize(fb_w, fb_h);
-      if (options.target_fps <= 0.0) walk.setTau(tau);
-      walk.setMinFeaturePx(min_feature);
-      walk.setOcclusion(static_cast<OcclusionMode>(occlusion_mode));
-      walk.setParametrics(static_cast<ParametricMode>(parametric_mode));
-      stats = walk.renderFrame(camera, t);
-      tau = float(walk.tau());
-
-      if (pressed(GLFW_KEY_F12)) {
-        char name[64];
-        std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
-        saveScreenshot(walk.renderer(), name);
-      }
-      walk.renderer().blitToScreen(fb_w, fb_h);
-
-      ImGui_ImplOpenGL3_NewFrame();
-      ImGui_ImplGlfw_NewFrame();
-      ImGui::NewFrame();
-      ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-      ImGui::Begin("TeraWalk");
-      ImGui::Text("%.1f ms  (%.0f fps)   cut %.2f ms   gpu %.2f ms", stats.frame_ms,
-                  stats.frame_ms > 0 ? 1000.0 / stats.frame_ms : 0.0, stats.cpu_cut_ms, stats.gpu_ms);
-      ImGui::Text("triangles %llu   clusters %u   visited %u",
-                  static_cast<unsigned long long>(stats.triangles_drawn), stats.nodes_drawn,
-                  stats.nodes_visited);
-      ImGui::Text("pages resident %u  queued %u  loaded %u   fallbacks %u", stats.pages_resident,
-                  stats.pages_requested, stats.pages_loaded, stats.ancestor_fallbacks);
-      ImGui::Text("GPU pool %.0f MiB   RSS %.0f MiB", stats.gpu_bytes_used / 1048576.0,
-                  stats.rss_bytes / 1048576.0);
-      ImGui::Text("occlusion culled %u   pass1 %u  pass2 %u   occluders %u   cell %lld",
-                  stats.occlusion_culled, stats.pass1_clusters, stats.pass2_clusters,
-                  stats.occluders_drawn, static_cast<long long>(stats.view_cell));
-      ImGui::Text("HZB build %.2f ms   test %.2f ms", stats.hzb_build_ms, stats.hzb_test_ms);
-      ImGui::Text("parametric clusters %u   instances %llu   mesh triangles %llu   %.2f ms",
-                  stats.parametric_clusters_drawn,
-                  static_cast<unsigned long long>(stats.parametric_instances_drawn),
-                  static_cast<unsigned long long>(stats.parametric_triangles),
-                  stats.parametric_cpu_ms);
-      if (stats.parametric_skipped > 0)
-        ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
-                           stats.parametric_skipped);
-      ImGui::SliderFloat("tau (px)", &tau, 0.25f, 64.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
-      ImGui::SliderFloat("FOV (deg)", &fov_deg, 20.0f, 120.0f, "%.0f");
-      ImGui::SliderFloat("near (m)", &near_m, 0.01f, 10.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
-      ImGui::SliderFloat("far (m)", &far_m, 100.0f, 1e6f, "%.0f", ImGuiSliderFlags_Logarithmic);
-      ImGui::SliderFloat("min feature (px)", &min_feature, 0.0f, 8.0f, "%.1f");
-      static_assert(int(OcclusionMode::Off) == 0 && int(OcclusionMode::Hzb) == 1 &&
-                    int(OcclusionMode::Pvs) == 2, "the combo lists the modes in enum order");
-      const char* const occlusion_names[] = {"off", "hzb", "pvs"};
-      ImGui::Combo("occlusion", &occlusion_mode, occlusion_names, 3);
-      static_assert(int(ParametricMode::Impostor) == 0 && int(ParametricMode::Tessellated) == 1 &&
-                    int(ParametricMode::Off) == 2, "the combo lists the modes in enum order");
-      const char* const parametric_names[] = {"impostor", "tessellated", "off"};
-      ImGui::Combo("parametrics [P]", &parametric_mode, parametric_names, 3);
-      ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
-                  nav.orbit ? "orbit" : "walk", nav.speed_mps, recording_on ? " (on)" : "");
-      ImGui::End();
-      ImGui::Render();
-      ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-      glfwSwapBuffers(window);
-
-      if (args.frames > 0 && frame + 1 >= args.frames) {
-        if (!args.screenshot.empty()) saveScreenshot(walk.renderer(), args.screenshot);
-        break;
-      }
-    }
-    if (recording_on && !recording.keys.empty()) writeCameraPath(recording, args.record_file);
-    glfwSetWindowUserPointer(window, nullptr);
-  }
-  ImGui_ImplOpenGL3_Shutdown();
-  ImGui_ImplGlfw_Shutdown();
-  ImGui::DestroyContext();
-  glfwDestroyWindow(window);
+  ViewerWindow window(width, height);
+  const WalkthroughOptions options = viewOptions(args, window.get());
+  Walkthrough walk(args.file, options);
+  runViewLoop(args, window.get(), walk, options);
 }
 
 }  // namespace
