@@ -677,4 +677,11 @@ void tessellateNurbsConforming(const NurbsPatchSet& set, float chordal_tolerance
   if (stats_out) *stats_out = stats;
 }
 
+uint64_t nurbsConformingTriangleCount(const NurbsPatchSet& patches, float chordal_tolerance) {
+  ConformingTessellationStats stats;
+  TriangleMesh scratch;
+  tessellateNurbsConforming(patches, chordal_tolerance, scratch, &stats);
+  return scratch.triangleCount();
+}
+
 }  // namespace tw

@@ -33,4 +33,10 @@ struct ConformingTessellationStats {
 void tessellateNurbsConforming(const NurbsPatchSet& patches, float chordal_tolerance,
                                TriangleMesh& out, ConformingTessellationStats* stats = nullptr);
 
+// The number of triangles tessellateNurbsConforming makes of `patches`. Unlike the per-patch
+// count (nurbsTriangleCount), it tessellates the set to know: borders shared with a neighbour
+// take that neighbour's points. A scene holds few NURBS sets (hulls, equipment shells), each a
+// few milliseconds. Throws as tessellateNurbsConforming.
+uint64_t nurbsConformingTriangleCount(const NurbsPatchSet& patches, float chordal_tolerance);
+
 }  // namespace tw

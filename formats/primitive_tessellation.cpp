@@ -13,6 +13,7 @@
 #include <numbers>
 #include <vector>
 
+#include "nurbs_conforming.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -682,14 +683,15 @@ void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out) {
   } else if (const auto* primitive = std::get_if<Primitive>(&geometry)) {
     tessellatePrimitive(*primitive, tolerance, out);
   } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&geometry)) {
-    tessellateNurbs(*nurbs, tolerance, out);
+    tessellateNurbsConforming(*nurbs, tolerance, out);
   }
 }
 
 uint64_t triangleCount(const Geometry& geometry, float tolerance) {
   if (const auto* mesh = std::get_if<TriangleMesh>(&geometry)) return mesh->triangleCount();
   if (const auto* primitive = std::get_if<Primitive>(&geometry)) return primitiveTriangleCount(*primitive, tolerance);
-  if (const auto* nurbs = std::get_if<NurbsPatchSet>(&geometry)) return nurbsTriangleCount(*nurbs, tolerance);
+  if (const auto* nurbs = std::get_if<NurbsPatchSet>(&geometry))
+    return nurbsConformingTriangleCount(*nurbs, tolerance);
   return 0;
 }
 

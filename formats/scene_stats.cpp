@@ -1,6 +1,7 @@
 // Counting sink behind `terawalk info`.
 #include "scene_stats.h"
 
+#include "nurbs_conforming.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -38,7 +39,7 @@ void SceneStats::onObject(const SceneObject& object) {
     primitive_triangles += triangles;
     ++primitives_by_type[primitive->index()];
   } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&object.geometry)) {
-    triangles = nurbsTriangleCount(*nurbs, tolerance_);
+    triangles = nurbsConformingTriangleCount(*nurbs, tolerance_);  // as the preprocessor
     nurbs_triangles += triangles;
     nurbs_patches += nurbs->patches.size();
   }

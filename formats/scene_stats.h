@@ -37,7 +37,7 @@ class SceneStats : public SceneSink {
   uint64_t nurbs_patches = 0;
   uint64_t mesh_triangles = 0;       // triangles stored as meshes
   uint64_t primitive_triangles = 0;  // tessellated equivalent of primitives
-  uint64_t nurbs_triangles = 0;      // tessellated equivalent of NURBS
+  uint64_t nurbs_triangles = 0;      // NURBS as the preprocessor tessellates them (conforming)
   uint64_t mesh_vertices = 0;
   Aabb bounds;
   std::vector<LayerStats> layers;

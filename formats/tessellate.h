@@ -27,6 +27,9 @@ uint32_t arcSegments(float radius, float sweep_rad, float tolerance);
 // indices are offset accordingly. Colours are left to the caller. Normals are appended when `out`
 // is empty or has one normal per position; positions without normals stay without normals.
 void tessellatePrimitive(const Primitive& primitive, float tolerance, TriangleMesh& out);
+// tessellateNurbs tessellates each patch on its own (cracks where patches share a border);
+// tessellate() takes NURBS sets through the conforming tessellation the preprocessor uses
+// (nurbs_conforming.h), so exports and snapshots show the triangles the package holds.
 void tessellateNurbs(const NurbsPatchSet& patches, float tolerance, TriangleMesh& out);
 void tessellate(const Geometry& geometry, float tolerance, TriangleMesh& out);
 
@@ -45,7 +48,8 @@ bool extrusionEnclosesSolid(std::span<const glm::vec2> profile);
 double profileSignedArea2(std::span<const glm::vec2> profile);
 
 // Exactly the number of triangles the functions above would append, computed without building
-// them (cheap enough to call for every object of a 100M-triangle scene).
+// them (cheap enough to call for every object of a 100M-triangle scene); triangleCount of a NURBS
+// set is the conforming tessellation's, which it builds to count (nurbs_conforming.h).
 uint64_t primitiveTriangleCount(const Primitive& primitive, float tolerance);
 uint64_t nurbsTriangleCount(const NurbsPatchSet& patches, float tolerance);
 uint64_t triangleCount(const Geometry& geometry, float tolerance);

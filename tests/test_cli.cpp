@@ -86,8 +86,18 @@ TEST(Cli, GeneratesAPlantThatInfoCounts) {
 
   nlohmann::json scene = infoJson(tws);
   uint64_t total = scene["triangles"]["total"];
-  EXPECT_GT(total, 180000u);
-  EXPECT_LT(total, 220000u);
+  // gen prints the total info counts, and the one its size target counts (NURBS per patch),
+  // which lands near the target.
+  unsigned long long printed = 0, mesh_part = 0, target_count = 0;
+  const size_t line = gen.output.find("  triangles    ");
+  ASSERT_NE(line, std::string::npos) << gen.output;
+  ASSERT_EQ(std::sscanf(gen.output.c_str() + line, " triangles %llu equivalent (%llu in meshes; %llu",
+                        &printed, &mesh_part, &target_count),
+            3)
+      << gen.output;
+  EXPECT_EQ(printed, total);
+  EXPECT_GT(target_count, 180000u);
+  EXPECT_LT(target_count, 220000u);
   EXPECT_GT(scene["objects_by_kind"]["primitive"].get<uint64_t>(), 100u);
   EXPECT_GT(scene["objects_by_kind"]["mesh"].get<uint64_t>(), 0u);
   EXPECT_GT(scene["objects_by_kind"]["nurbs"].get<uint64_t>(), 0u);
@@ -100,6 +110,29 @@ TEST(Cli, GeneratesAPlantThatInfoCounts) {
 
   ProjectDatabase database = ProjectDatabase::open(db);
   EXPECT_GT(database.recordCount(), 0u);
+}
+
+// `info` counts a NURBS hull as the preprocessor tessellates it (conforming across patches), so
+// the scene's mesh and NURBS triangles are the package's level 0, and the PLY of `gen --mesh`
+// holds the same triangles.
+TEST(Cli, InfoCountsTheHullAsThePreprocessorTessellatesIt) {
+  auto dir = test::scratchDir();
+  auto tws = dir / "plant.tws";
+  auto ply = dir / "plant.ply";
+  auto twk = dir / "plant.twk";
+  RunResult gen = run("gen plant --quiet --triangles 300000 --seed 2 --no-db -o " + tws.string() +
+                      " --mesh " + ply.string());
+  ASSERT_EQ(gen.exit_code, 0) << gen.output;
+  RunResult pre = run("preprocess --quiet --visibility off " + tws.string() + " -o " + twk.string());
+  ASSERT_EQ(pre.exit_code, 0) << pre.output;
+
+  nlohmann::json scene = infoJson(tws);
+  nlohmann::json package = infoJson(twk);
+  const uint64_t hull = scene["triangles"]["nurbs_equivalent"];
+  const uint64_t mesh = scene["triangles"]["mesh"];
+  EXPECT_GT(hull, 0u);
+  EXPECT_EQ(mesh + hull, package["triangles"]["level0"].get<uint64_t>());
+  EXPECT_EQ(infoJson(ply)["triangles"]["total"], scene["triangles"]["total"]);
 }
 
 // The 10M-triangle benchmark plant (seed 1) has these exact counts. They change only when the
@@ -115,7 +148,7 @@ TEST(Cli, TenMillionTrianglePlantHasKnownCounts) {
   EXPECT_EQ(j["objects_by_kind"]["mesh"], 473);
   EXPECT_EQ(j["objects_by_kind"]["nurbs"], 2);
   EXPECT_EQ(j["nurbs_patches"], 356);
-  EXPECT_EQ(j["triangles"]["total"], 9989402);
+  EXPECT_EQ(j["triangles"]["total"], 10417074);  // the hulls as the preprocessor tessellates them
   EXPECT_EQ(j["triangles"]["mesh"], 1766624);
   EXPECT_EQ(j["layers"].size(), 12u);
 }

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "nurbs.h"
+#include "nurbs_conforming.h"
 #include "tessellate.h"
 #include "watertight_check.h"
 #include "nurbs_test_support.h"
@@ -509,7 +510,7 @@ TEST(NurbsTessellation, CountEqualsAppendedTriangles) {
   EXPECT_EQ(valid_sets, 200u);
   // Also through the Geometry dispatch.
   const NurbsPatchSet cyl = closedCylinder(1.0f, 1.0f);
-  EXPECT_EQ(triangleCount(Geometry{cyl}, 0.01f), nurbsTriangleCount(cyl, 0.01f));
+  EXPECT_EQ(triangleCount(Geometry{cyl}, 0.01f), nurbsConformingTriangleCount(cyl, 0.01f));
 }
 
 TEST(NurbsTessellation, HostileInputIsBounded) {

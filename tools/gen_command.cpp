@@ -130,9 +130,11 @@ void runGenPlant(const GenPlantOptions& o, const GlobalOptions& global) {
               static_cast<unsigned long long>(summary.mesh_objects),
               static_cast<unsigned long long>(summary.nurbs_objects),
               static_cast<unsigned long long>(summary.nurbs_patches));
-  std::printf("  triangles    %llu equivalent (%llu in meshes)\n",
+  std::printf("  triangles    %llu equivalent (%llu in meshes; %llu with NURBS counted per patch, "
+              "as the target)\n",
               static_cast<unsigned long long>(summary.triangles),
-              static_cast<unsigned long long>(summary.mesh_triangles));
+              static_cast<unsigned long long>(summary.mesh_triangles),
+              static_cast<unsigned long long>(summary.budget_triangles));
   std::printf("  layers       %llu\n  modules      %llu on %llu hulls\n  records      %llu\n",
               static_cast<unsigned long long>(summary.layers),
               static_cast<unsigned long long>(summary.modules),

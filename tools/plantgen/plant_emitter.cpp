@@ -4,6 +4,8 @@
 #include <cstdarg>
 #include <cstdio>
 
+#include "nurbs_conforming.h"
+
 namespace tw::plant {
 
 Layer layerDefinition(uint32_t index) {
@@ -55,7 +57,9 @@ void Emitter::primitive(uint32_t layer, const std::string& key, std::string name
                         const Transform& transform, const Primitive& primitive) {
   ++summary_.objects;
   ++summary_.primitive_objects;
-  summary_.triangles += primitiveTriangleCount(primitive, tolerance_);
+  const uint64_t triangles = primitiveTriangleCount(primitive, tolerance_);
+  summary_.triangles += triangles;
+  summary_.budget_triangles += triangles;
   uint32_t id = next_id_++;
   if (!sink_) return;
   scratch_.info.id = id;
@@ -75,13 +79,17 @@ void Emitter::emit(SceneObject& object) {
     ++summary_.mesh_objects;
     summary_.mesh_triangles += mesh->triangleCount();
     summary_.triangles += mesh->triangleCount();
+    summary_.budget_triangles += mesh->triangleCount();
   } else if (const auto* p = std::get_if<Primitive>(&object.geometry)) {
     ++summary_.primitive_objects;
-    summary_.triangles += primitiveTriangleCount(*p, tolerance_);
+    const uint64_t triangles = primitiveTriangleCount(*p, tolerance_);
+    summary_.triangles += triangles;
+    summary_.budget_triangles += triangles;
   } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&object.geometry)) {
     ++summary_.nurbs_objects;
     summary_.nurbs_patches += nurbs->patches.size();
-    summary_.triangles += nurbsTriangleCount(*nurbs, tolerance_);
+    summary_.budget_triangles += nurbsTriangleCount(*nurbs, tolerance_);
+    summary_.triangles += nurbsConformingTriangleCount(*nurbs, tolerance_);
   }
   if (sink_) sink_->onObject(object);
 }

@@ -1,8 +1,9 @@
 // The plant generator's single output path: ids, layers, records, and equivalent-triangle counts.
 //
 // Every part builder hands its objects to an Emitter, which numbers them, counts their
-// equivalent triangles exactly as tw::SceneStats does, and streams them to the sink. An Emitter
-// without a sink is a dry run: it only counts, which is how the driver sizes the last module.
+// equivalent triangles (exactly as tw::SceneStats does, and as the size target does: NURBS per
+// patch) and streams them to the sink. An Emitter without a sink is a dry run: it only counts,
+// which is how the driver sizes the last module.
 #pragma once
 
 #include <cstdint>
@@ -53,7 +54,8 @@ class Emitter {
 
   const PlantSummary& summary() const { return summary_; }
   PlantSummary& summary() { return summary_; }
-  uint64_t triangles() const { return summary_.triangles; }
+  // As the size target counts them (PlantOptions::target_triangles).
+  uint64_t triangles() const { return summary_.budget_triangles; }
 
   // Tag counters live here so that names stay unique across modules and hulls.
   uint32_t next_line_number = 1001;

@@ -21,8 +21,10 @@ namespace tw {
 
 struct PlantOptions {
   // Size of the plant in equivalent triangles: meshes count their triangles, parametrics
-  // tw::primitiveTriangleCount and NURBS tw::nurbsTriangleCount at `tolerance`. The generated
-  // total lands within a few percent of this from about 50,000 up (less is one small module).
+  // tw::primitiveTriangleCount and NURBS tw::nurbsTriangleCount (per patch) at `tolerance`. The
+  // generated total (PlantSummary::budget_triangles) lands within a few percent of this from
+  // about 50,000 up (less is one small module). Counting NURBS per patch, not as the preprocessor
+  // tessellates them, keeps the plants of each seed and size what they were.
   uint64_t target_triangles = 1'000'000;
   uint64_t seed = 1;
   float tolerance = kDefaultChordalTolerance;  // metres
@@ -32,6 +34,7 @@ struct PlantSummary {
   uint64_t objects = 0;
   uint64_t layers = 0;
   uint64_t triangles = 0;  // equivalent triangles, counted exactly like tw::SceneStats does
+  uint64_t budget_triangles = 0;  // as the size target counts them: NURBS per patch
   uint64_t mesh_triangles = 0;
   uint64_t primitive_objects = 0;
   uint64_t mesh_objects = 0;
