@@ -44,8 +44,9 @@ $tw -q bench --quick --out "$out/bench" --cache "$out/bench-cache" | tee "$out/b
   echo "## Preprocess"; echo; echo '```'; cat "$out/preprocess.txt"; echo '```'
   echo "## Package"; echo; echo '```'; cat "$out/verify.txt" "$out/package.txt"; echo '```'
   echo "## Walkthrough (terawalk render, data/paths/plant-tour.path)"; echo
-  echo "Per-frame statistics: walk/frames.csv. Mesh clusters only: parametric objects are counted"
-  echo "in parametric_skipped until their shaders land."; echo
+  echo "Per-frame statistics: walk/frames.csv. Mesh clusters and parametric objects (pipes, beams,"
+  echo "vessels, drawn as parametrics: docs/parametrics.md) are both counted; triangles_drawn is the"
+  echo "mesh clusters', parametric_triangles the parametrics' run-time meshes'."; echo
   echo '```'; cat "$out/render.txt"; echo '```'
   echo; echo "![walk, frame 2](walk/frame_00002.png)"
   echo; echo "![walk, frame 14](walk/frame_00014.png)"
