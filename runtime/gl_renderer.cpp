@@ -459,6 +459,9 @@ void GlRenderer::blitToScreen(int screen_width, int screen_height) const {
   const bool same_size = screen_width == s.options.width && screen_height == s.options.height;
   glBlitNamedFramebuffer(s.fbo, 0, 0, 0, s.options.width, s.options.height, 0, 0, screen_width,
                          screen_height, GL_COLOR_BUFFER_BIT, same_size ? GL_NEAREST : GL_LINEAR);
+  // Overlays (the viewer's panel) draw next, and must land on the screen, not in the frame.
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  glViewport(0, 0, screen_width, screen_height);
 }
 
 }  // namespace tw

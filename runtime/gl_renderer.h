@@ -108,7 +108,8 @@ class GlRenderer {
   void readObjectIds(std::vector<uint32_t>& ids, bool flip_y = true) const;
   // Reversed-Z depth (1 near, 0 far and background), same row order rules.
   void readDepth(std::vector<float>& depth, bool flip_y = true) const;
-  // Copies the colour to the default framebuffer (windowed mode) at its size.
+  // Copies the colour to the default framebuffer (windowed mode) at its size, and leaves the
+  // default framebuffer bound with a viewport of that size, for overlays drawn after it.
   void blitToScreen(int screen_width, int screen_height) const;
 
   // GL names, for passes that render into or read the same targets (e.g. occlusion, overlays).

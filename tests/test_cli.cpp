@@ -353,19 +353,5 @@ TEST(Cli, RenderRejectsABadPathFileNamingTheLine) {
   EXPECT_EQ(no_path.exit_code, 1) << no_path.output;
 }
 
-// The window under a virtual X server (skipped where xvfb-run is missing).
-TEST(Cli, ViewRunsUnderXvfbAndSavesAScreenshot) {
-  if (std::system("command -v xvfb-run > /dev/null 2>&1") != 0) GTEST_SKIP() << "no xvfb-run";
-  auto package = bunnyPackageForCli();
-  auto shot = test::scratchDir() / "view.png";
-  const test::CommandResult r = test::runShell(
-      "xvfb-run -a -s '-screen 0 640x480x24' " + std::string(TW_TERAWALK_EXE) + " view " +
-      package.string() + " --size 320x240 --frames 3 --screenshot " + shot.string());
-  ASSERT_EQ(r.exit_code, 0) << r.output;
-  const std::string& output = r.output;
-  EXPECT_TRUE(std::filesystem::exists(shot)) << output;
-  EXPECT_GT(std::filesystem::file_size(shot), 500u);
-}
-
 }  // namespace
 }  // namespace tw
