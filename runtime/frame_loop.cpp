@@ -70,6 +70,7 @@ Walkthrough::Walkthrough(const std::filesystem::path& package, const Walkthrough
   renderer_options.height = options_.height;
   renderer_ = std::make_unique<GlRenderer>(renderer_options);
   renderer_->setObjectColors(objectColors(*view_));
+  object_states_ = ObjectStates(view_->objects().size());
   culler_ = std::make_unique<OcclusionCuller>(*view_);
   culler_->setHzbOptions(options_.hzb);
   parametric_ = std::make_unique<ParametricRenderer>(*view_, *renderer_, options_.parametric_meshes);
@@ -207,15 +208,17 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   const glm::dvec3 eye = camera.position - view_->origin();
   near_reach_m_ = camera.nearPlaneReach(aspect);
   const auto cut_start = Clock::now();
-  const std::vector<uint32_t>& draw_list =
+  const std::vector<uint32_t>& cut_list =
       options_.reference ? reference_clusters_ : selectCut(camera, eye, aspect, time_s, stats);
   stats.cpu_cut_ms = msSince(cut_start);
-  const std::vector<uint32_t>& parametric_list =
-      options_.reference ? all_parametric_ : cut_result_.parametric_clusters;
+  // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
+  for (uint32_t c : cut_list) pager_->touch(view_->clusters()[c].page);
+  uploadObjectStates();
+  const std::vector<uint32_t>& draw_list = withoutHidden(cut_list, shown_clusters_);
+  const std::vector<uint32_t>& parametric_list = withoutHidden(
+      options_.reference ? all_parametric_ : cut_result_.parametric_clusters, shown_parametric_);
   rememberView(camera, eye, aspect, time_s, parametric_list);
 
-  // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
-  for (uint32_t c : draw_list) pager_->touch(view_->clusters()[c].page);
   renderer_->beginFrame(last_rotation_, last_projection_);
   // Draw items in double: offset of each cluster's grid origin from the eye.
   items_.clear();
@@ -226,6 +229,22 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     drawWithoutHzb(mode, eye, draw_list, stats);
   finishFrame(frame_start, stats);
   return stats;
+}
+
+void Walkthrough::uploadObjectStates() {
+  if (!object_states_.changed()) return;
+  renderer_->setObjectStates(object_states_.gpuStates());
+  object_states_.markUploaded();
+}
+
+const std::vector<uint32_t>& Walkthrough::withoutHidden(const std::vector<uint32_t>& clusters,
+                                                        std::vector<uint32_t>& kept) const {
+  if (object_states_.noneHidden()) return clusters;
+  kept.clear();
+  const auto records = view_->clusters();
+  for (uint32_t c : clusters)
+    if (!object_states_.allHidden(records[c].object_min, records[c].object_max)) kept.push_back(c);
+  return kept;
 }
 
 // The LOD cut from the camera, its missing pages requested; with prefetching, also the cut from
@@ -297,6 +316,7 @@ void Walkthrough::drawWithHzb(const glm::dvec3& eye, std::span<const uint32_t> d
   frame.pager = pager_.get();
   frame.eye = eye;
   frame.view_projection = last_projection_ * last_rotation_;  // as the renderer multiplies
+  frame.objects = &object_states_;
   stats.view_cell = -1;
   // Parametric clusters take both passes like mesh clusters (their boxes are tested the same
   // way): inside a plant most pipes are behind decks and walls, which are parametric too.

@@ -26,6 +26,7 @@
 #include "frame_stats.h"
 #include "gl_renderer.h"
 #include "lod_cut.h"
+#include "object_states.h"
 #include "occlusion_culler.h"
 #include "package_view.h"
 #include "pager.h"
@@ -96,6 +97,10 @@ class Walkthrough {
   ParametricMode parametrics() const { return options_.parametrics; }
   void setParametrics(ParametricMode mode) { options_.parametrics = resolveParametricMode(mode); }
   ParametricRenderer& parametricRenderer() { return *parametric_; }
+  // Per-object state by object index (hidden, selected, colour override): changes reach the GPU
+  // in one upload at the next frame, and clusters whose objects are all hidden are not drawn.
+  ObjectStates& objectStates() { return object_states_; }
+  const ObjectStates& objectStates() const { return object_states_; }
   // World bounds of the model (double), for cameras and paths.
   glm::dvec3 worldMin() const;
   glm::dvec3 worldMax() const;
@@ -112,6 +117,11 @@ class Walkthrough {
   void drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
                       const std::vector<uint32_t>& draw_list, FrameStats& stats);
   void finishFrame(std::chrono::steady_clock::time_point frame_start, FrameStats& stats);
+  // The object states uploaded if they changed; `clusters` without the ones whose objects are all
+  // hidden (in `kept`, returned), or `clusters` itself when nothing is hidden.
+  void uploadObjectStates();
+  const std::vector<uint32_t>& withoutHidden(const std::vector<uint32_t>& clusters,
+                                             std::vector<uint32_t>& kept) const;
   // Appends one draw item per cluster (resident, from the cut) seen from `eye`.
   void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                    std::vector<DrawItem>& items) const;
@@ -138,6 +148,8 @@ class Walkthrough {
   // hzb: the cut's mesh and parametric clusters together, and each pass split by kind.
   std::vector<uint32_t> hzb_cut_, mesh_pass_, parametric_pass_;
   ParametricView last_parametric_view_;
+  ObjectStates object_states_;
+  std::vector<uint32_t> shown_clusters_, shown_parametric_;  // the cut without hidden clusters
   size_t full_order_pass1_ = 0;  // hzb: parametrics were drawn after this many of full_order_
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
   std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn

@@ -47,6 +47,7 @@ struct GlRenderer::Impl {
   GLuint per_triangle_program = 0;  // clusters with GpuCluster::object_per_triangle
   GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
+  GLuint state_buffer = 0;  // GpuObjectState per object, as many as colours
   uint32_t object_color_count = 0;
   glm::mat4 view_projection{1.0f};
 
@@ -163,6 +164,7 @@ struct GlRenderer::Impl {
     glDeleteBuffers(1, &indirect_buffer);
     glDeleteBuffers(1, &draw_data_buffer);
     glDeleteBuffers(1, &color_buffer);
+    glDeleteBuffers(1, &state_buffer);
     glDeleteProgram(program);
     glDeleteProgram(per_triangle_program);
     glDeleteProgram(depth_program);
@@ -195,6 +197,9 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
   // Never bind an empty store: keep one (unused) entry until colours are set.
   const uint32_t none = 0;
   glNamedBufferData(s.color_buffer, sizeof none, &none, GL_STATIC_DRAW);
+  glCreateBuffers(1, &s.state_buffer);
+  const GpuObjectState no_state;
+  glNamedBufferData(s.state_buffer, sizeof no_state, &no_state, GL_DYNAMIC_DRAW);
   for (GLuint program : {s.program, s.per_triangle_program})
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, 0u);
   glCreateQueries(GL_TIME_ELAPSED, kQueryRing, s.queries);
@@ -212,6 +217,7 @@ int GlRenderer::height() const { return impl_->options.height; }
 unsigned GlRenderer::framebuffer() const { return impl_->fbo; }
 unsigned GlRenderer::depthTexture() const { return impl_->depth; }
 unsigned GlRenderer::objectColorBuffer() const { return impl_->color_buffer; }
+unsigned GlRenderer::objectStateBuffer() const { return impl_->state_buffer; }
 uint32_t GlRenderer::objectColorCount() const { return impl_->object_color_count; }
 const glm::mat4& GlRenderer::viewProjection() const { return impl_->view_projection; }
 
@@ -231,9 +237,21 @@ void GlRenderer::setObjectColors(std::span<const uint32_t> rgba) {
                       GL_STATIC_DRAW);
     s.object_color_count = static_cast<uint32_t>(
         std::min<size_t>(rgba.size(), std::numeric_limits<uint32_t>::max()));
+    // The states cover the same objects (shaders read both below object_color_count): none set.
+    const std::vector<GpuObjectState> none(s.object_color_count);
+    glNamedBufferData(s.state_buffer, static_cast<GLsizeiptr>(none.size() * sizeof(GpuObjectState)),
+                      none.data(), GL_DYNAMIC_DRAW);
   }
   for (GLuint program : {s.program, s.per_triangle_program})
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, s.object_color_count);
+}
+
+void GlRenderer::setObjectStates(std::span<const GpuObjectState> states) {
+  Impl& s = *impl_;
+  const size_t n = std::min<size_t>(states.size(), s.object_color_count);
+  if (n > 0)
+    glNamedBufferSubData(s.state_buffer, 0, static_cast<GLsizeiptr>(n * sizeof(GpuObjectState)),
+                         states.data());
 }
 
 void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection) {
@@ -351,6 +369,7 @@ void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> i
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kTriangleObjectBinding,
                    pool.triangleObjectBuffer());
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, s.color_buffer);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, s.state_buffer);
   glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
   glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, nullptr,
                               static_cast<GLsizei>(s.commands.size()), 0);

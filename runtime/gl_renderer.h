@@ -26,6 +26,7 @@
 #include <glm/glm.hpp>
 
 #include "geometry_pool.h"
+#include "object_states.h"
 
 namespace tw {
 
@@ -78,6 +79,9 @@ class GlRenderer {
   // Colour per object index (0xAABBGGRR), resolved from the object and layer tables; objects
   // beyond the table draw grey.
   void setObjectColors(std::span<const uint32_t> rgba);
+  // Per-object state (object_states.h) for the objects setObjectColors gave, in one upload;
+  // entries past them are ignored. setObjectColors resets every state to none.
+  void setObjectStates(std::span<const GpuObjectState> states);
 
   // Clears colour, ids and depth, and sets the camera (rotation and projection; positions come
   // eye-relative through DrawItem::offset_eye).
@@ -119,6 +123,7 @@ class GlRenderer {
   // object colour SSBO (uint 0xAABBGGRR per object, bind at gl_shaders.h kObjectColorBinding),
   // its entry count, and projection * view rotation of the last beginFrame.
   unsigned objectColorBuffer() const;
+  unsigned objectStateBuffer() const;  // GpuObjectState per object, at kObjectStateBinding
   uint32_t objectColorCount() const;
   const glm::mat4& viewProjection() const;
 

@@ -19,6 +19,7 @@ namespace tw::gl {
 inline constexpr unsigned kDrawDataBinding = 0;        // GpuDrawData[], indexed by gl_DrawIDARB
 inline constexpr unsigned kTriangleObjectBinding = 1;  // uint object per pool triangle
 inline constexpr unsigned kObjectColorBinding = 2;     // uint 0xAABBGGRR per object index
+inline constexpr unsigned kObjectStateBinding = 5;     // GpuObjectState per object index
 // Uniform locations.
 inline constexpr int kViewProjectionLocation = 0;  // mat4: projection * view rotation
 inline constexpr int kObjectColorCountLocation = 1;  // uint: entries in the colour buffer
@@ -80,14 +81,29 @@ layout(location = 0) uniform mat4 view_projection;
 // two-sided (the normal is turned toward the eye, because CAD surfaces are often open).
 // The object colour part (objectColorGlsl) also serves vertex stages that hand the colour to
 // the fragments flat.
+// Per-object state (object_states.h): hidden objects are discarded by every fragment stage that
+// outputs an object id (objectHidden), so they neither show nor write depth; selected ones are
+// tinted and recoloured ones take their override, through objectBaseColor.
 inline std::string objectColorGlsl() {
   return R"(
 layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
+struct ObjectState { uint flags; uint color_rgba; };
+layout(std430, binding = 5) readonly buffer ObjectStates { ObjectState object_states[]; };
 layout(location = 1) uniform uint object_color_count;
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
+const vec4 kSelectedTint = vec4(1.0, 0.55, 0.05, 1.0);
+const uint kObjectHidden = 1u, kObjectSelected = 2u, kObjectRecolored = 8u;
+uint objectFlags(uint object) {
+  return object < object_color_count ? object_states[object].flags : 0u;
+}
+bool objectHidden(uint object) { return (objectFlags(object) & kObjectHidden) != 0u; }
 vec4 objectBaseColor(uint object) {
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
-  return rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
+  vec4 base = rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
+  uint flags = objectFlags(object);
+  if ((flags & kObjectRecolored) != 0u) base = unpackUnorm4x8(object_states[object].color_rgba);
+  if ((flags & kObjectSelected) != 0u) base = mix(base, kSelectedTint, 0.6);
+  return base;
 }
 )";
 }
@@ -184,6 +200,7 @@ void main() {
     base = objectBaseColor(object);
   }
 #endif
+  if (id != 0u && objectHidden(id - 1u)) discard;
   out_color = shadeSurface(base, facetNormal(pos_eye), pos_eye);
   out_id = id;
 }

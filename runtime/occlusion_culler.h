@@ -46,6 +46,7 @@
 #include "frame_stats.h"
 #include "gl_renderer.h"
 #include "hzb_pyramid.h"
+#include "object_states.h"
 #include "package_view.h"
 #include "pager.h"
 #include "visibility_section.h"
@@ -125,6 +126,8 @@ struct OcclusionFrame {
   Pager* pager = nullptr;
   glm::dvec3 eye{0.0};              // package frame, metres
   glm::mat4 view_projection{1.0f};  // projection * rotation-only view, as the renderer uses
+  // Coarse occluders holding a hidden object are left out: a hidden object occludes nothing.
+  const ObjectStates* objects = nullptr;
 };
 
 // The first pyramid level whose width is at most max_width_px, for a width x height buffer

@@ -24,6 +24,7 @@
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "image_compare.h"
+#include "object_queries.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -63,6 +64,11 @@ struct RenderArgs {
   std::string hzb_build = "auto";
   int hzb_span = BoxTest{}.max_span_texels;
   int hzb_split = BoxTest{}.split_px;
+  // Per-object state along the whole path (object_states.h).
+  std::vector<std::string> hide_layers;
+  std::vector<std::string> isolate_layers;
+  std::string isolate_keys;  // FILE or KEY,KEY,...
+  std::string select_keys;
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -334,6 +340,27 @@ void writeRenderOutputs(const std::filesystem::path& out_dir, const std::vector<
   std::fclose(f);
 }
 
+// --hide-layer, --isolate-layer, --isolate-keys and --select as object states: isolating hides
+// every object but those named (layers and keys together), hiding then hides the layers named.
+void applyObjectStates(const RenderArgs& args, Walkthrough& walk) {
+  const PackageView& view = walk.package();
+  ObjectStates& states = walk.objectStates();
+  if (!args.isolate_layers.empty() || !args.isolate_keys.empty()) {
+    states.setAll(kObjectHidden, true);
+    for (const std::string& name : args.isolate_layers)
+      for (uint32_t o : objectsOfLayer(view, layerIndex(view, name)))
+        states.set(o, kObjectHidden, false);
+    if (!args.isolate_keys.empty())
+      for (uint32_t o : objectsWithKeys(view, parseKeyList(args.isolate_keys)))
+        states.set(o, kObjectHidden, false);
+  }
+  for (const std::string& name : args.hide_layers)
+    for (uint32_t o : objectsOfLayer(view, layerIndex(view, name))) states.set(o, kObjectHidden, true);
+  if (!args.select_keys.empty())
+    for (uint32_t o : objectsWithKeys(view, parseKeyList(args.select_keys)))
+      states.set(o, kObjectSelected, true);
+}
+
 // Steps: the GL context, the walkthrough over the package, the path rendered frame by frame,
 // the summary printed and, with --out, written beside the frames' statistics.
 void runRender(const RenderArgs& args, const GlobalOptions& global) {
@@ -350,6 +377,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   const auto open_start = Clock::now();
   Walkthrough walk(args.file, options);
   times.open_ms = msSince(open_start);
+  applyObjectStates(args, walk);
 
   Aabb bounds;
   bounds.add(walk.worldMin());
@@ -447,6 +475,15 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_flag("--hzb-final-rebuild,!--no-hzb-final-rebuild", args->hzb_final_rebuild,
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
+  cmd->add_option("--hide-layer", args->hide_layers, "Hide the objects of this layer (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_option("--isolate-layer", args->isolate_layers,
+                  "Show only the objects of this layer (repeatable; with --isolate-keys, both)")
+      ->allow_extra_args(false);
+  cmd->add_option("--isolate-keys", args->isolate_keys,
+                  "Show only the objects with these database keys: FILE (one a line) or K1,K2,...");
+  cmd->add_option("--select", args->select_keys,
+                  "Select (tint) the objects with these database keys: FILE or K1,K2,...");
   cmd->add_flag("--check-occlusion", args->check_occlusion,
                 "Draw each frame's cut again without occlusion culling and count the pixels "
                 "whose object id differs (occlusion_lost_px)");

@@ -22,8 +22,8 @@ using uint = uint32_t;
 #define TW_GPU_CONST(type, name, value) const type name = value
 #endif
 
-// Shader storage bindings of the parametric passes (the mesh pass uses 0..2; 2 is the object
-// colour table, shared).
+// Shader storage bindings of the parametric passes (the mesh pass uses 0..2; 2, the object
+// colour table, and 5, the object states, are shared: gl_shaders.h).
 TW_GPU_CONST(int, kInstanceBinding, 3);        // GpuInstance[], the package's whole table
 TW_GPU_CONST(int, kParametricDrawBinding, 4);  // GpuParametricDraw[], one per cluster drawn
 TW_GPU_CONST(int, kSharedObjectColorBinding, 2);

@@ -273,6 +273,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
   glDepthFunc(GL_GREATER);
   glDisable(GL_BLEND);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, r.objectColorBuffer());
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, r.objectStateBuffer());
 
   // Impostors: commands and per-cluster records of every type in one upload each.
   s.draws.clear();
