@@ -29,6 +29,17 @@ constexpr const char* kFindSql =
     "SELECT db_key, type, line_number, service, material, nominal_diameter_mm, "
     "design_pressure_bar, design_temperature_c, description FROM records WHERE db_key = ?1";
 constexpr const char* kCountSql = "SELECT COUNT(*) FROM records";
+// Generic properties beside the records: what importers know of an object (IFC property sets,
+// STEP attributes) without a schema of their own. Several rows per key.
+constexpr const char* kCreatePropertiesSql =
+    "CREATE TABLE properties (db_key TEXT NOT NULL, property_set TEXT NOT NULL, "
+    "name TEXT NOT NULL, value TEXT, unit TEXT);"
+    "CREATE INDEX properties_by_key ON properties (db_key)";
+constexpr const char* kInsertPropertySql =
+    "INSERT INTO properties (db_key, property_set, name, value, unit) VALUES (?1, ?2, ?3, ?4, ?5)";
+constexpr const char* kPropertiesSql =
+    "SELECT db_key, property_set, name, value, unit FROM properties WHERE db_key = ?1 "
+    "ORDER BY rowid";
 
 std::string columnText(sqlite3_stmt* stmt, int column) {
   const unsigned char* text = sqlite3_column_text(stmt, column);
@@ -45,6 +56,8 @@ struct ProjectDatabase::State {
   sqlite3_stmt* insert = nullptr;
   sqlite3_stmt* find = nullptr;
   sqlite3_stmt* count = nullptr;
+  sqlite3_stmt* insert_property = nullptr;
+  sqlite3_stmt* properties = nullptr;  // null for a database made before the table existed
   bool in_transaction = false;
   uint64_t pending_rows = 0;
 
@@ -55,6 +68,8 @@ struct ProjectDatabase::State {
     sqlite3_finalize(insert);
     sqlite3_finalize(find);
     sqlite3_finalize(count);
+    sqlite3_finalize(insert_property);
+    sqlite3_finalize(properties);
     sqlite3_close(db);
   }
 
@@ -71,6 +86,16 @@ struct ProjectDatabase::State {
     sqlite3_stmt* stmt = nullptr;
     check(sqlite3_prepare_v2(db, sql, -1, &stmt, nullptr), "cannot prepare statement");
     return stmt;
+  }
+  void beginBatch() {
+    if (in_transaction) return;
+    exec("BEGIN");
+    in_transaction = true;
+  }
+  void bindText(sqlite3_stmt* stmt, int index, const std::string& value) const {
+    check(sqlite3_bind_text(stmt, index, value.data(), static_cast<int>(value.size()),
+                            SQLITE_TRANSIENT),
+          "cannot bind value");
   }
 };
 
@@ -91,7 +116,10 @@ ProjectDatabase ProjectDatabase::create(const std::filesystem::path& path) {
   state->exec("PRAGMA journal_mode=OFF");
   state->exec("PRAGMA synchronous=OFF");
   state->exec(kCreateSql);
+  state->exec(kCreatePropertiesSql);
   state->insert = state->prepare(kInsertSql);
+  state->insert_property = state->prepare(kInsertPropertySql);
+  state->properties = state->prepare(kPropertiesSql);
   state->find = state->prepare(kFindSql);
   state->count = state->prepare(kCountSql);
   return ProjectDatabase(std::move(state));
@@ -106,22 +134,18 @@ ProjectDatabase ProjectDatabase::open(const std::filesystem::path& path) {
   // database holding our schema.
   state->find = state->prepare(kFindSql);
   state->count = state->prepare(kCountSql);
+  // Databases made before the property table have none: no properties, not an error.
+  if (sqlite3_prepare_v2(state->db, kPropertiesSql, -1, &state->properties, nullptr) != SQLITE_OK)
+    state->properties = nullptr;
   return ProjectDatabase(std::move(state));
 }
 
 void ProjectDatabase::put(const ProjectRecord& record) {
   State& s = *state_;
   if (!s.insert) s.fail("database is read-only");
-  if (!s.in_transaction) {
-    s.exec("BEGIN");
-    s.in_transaction = true;
-  }
+  s.beginBatch();
   sqlite3_stmt* stmt = s.insert;
-  auto text = [&](int index, const std::string& value) {
-    s.check(sqlite3_bind_text(stmt, index, value.data(), static_cast<int>(value.size()),
-                              SQLITE_TRANSIENT),
-            "cannot bind value");
-  };
+  auto text = [&](int index, const std::string& value) { s.bindText(stmt, index, value); };
   text(1, record.db_key);
   text(2, record.type);
   text(3, record.line_number);
@@ -137,6 +161,38 @@ void ProjectDatabase::put(const ProjectRecord& record) {
   if (++s.pending_rows >= kRowsPerTransaction) commit();
 }
 
+void ProjectDatabase::putProperty(const ProjectProperty& property) {
+  State& s = *state_;
+  if (!s.insert_property) s.fail("database is read-only");
+  s.beginBatch();
+  sqlite3_stmt* stmt = s.insert_property;
+  s.bindText(stmt, 1, property.db_key);
+  s.bindText(stmt, 2, property.set);
+  s.bindText(stmt, 3, property.name);
+  s.bindText(stmt, 4, property.value);
+  s.bindText(stmt, 5, property.unit);
+  int rc = sqlite3_step(stmt);
+  sqlite3_reset(stmt);
+  if (rc != SQLITE_DONE) s.fail("cannot insert a property of '" + property.db_key + "'");
+  if (++s.pending_rows >= kRowsPerTransaction) commit();
+}
+
+std::vector<ProjectProperty> ProjectDatabase::properties(const std::string& db_key) const {
+  State& s = *state_;
+  std::vector<ProjectProperty> out;
+  if (!s.properties) return out;
+  sqlite3_stmt* stmt = s.properties;
+  s.bindText(stmt, 1, db_key);
+  int rc;
+  while ((rc = sqlite3_step(stmt)) == SQLITE_ROW)
+    out.push_back({columnText(stmt, 0), columnText(stmt, 1), columnText(stmt, 2),
+                   columnText(stmt, 3), columnText(stmt, 4)});
+  sqlite3_reset(stmt);
+  sqlite3_clear_bindings(stmt);
+  if (rc != SQLITE_DONE) s.fail("cannot read the properties of '" + db_key + "'");
+  return out;
+}
+
 void ProjectDatabase::commit() {
   State& s = *state_;
   if (!s.in_transaction) return;
@@ -148,9 +204,7 @@ void ProjectDatabase::commit() {
 std::optional<ProjectRecord> ProjectDatabase::find(const std::string& db_key) const {
   State& s = *state_;
   sqlite3_stmt* stmt = s.find;
-  s.check(sqlite3_bind_text(stmt, 1, db_key.data(), static_cast<int>(db_key.size()),
-                            SQLITE_TRANSIENT),
-          "cannot bind value");
+  s.bindText(stmt, 1, db_key);
   int rc = sqlite3_step(stmt);
   std::optional<ProjectRecord> result;
   if (rc == SQLITE_ROW) {

@@ -3,13 +3,16 @@
 // Objects carry a database key (a plant tag such as "P-1203-A" or "12\"-HC-1001-A1"); review
 // tools look the key up here to show the object's engineering record. The table is
 // `records(db_key TEXT PRIMARY KEY, type, line_number, service, material, nominal_diameter_mm,
-// design_pressure_bar, design_temperature_c, description)`; see docs/project-database.md.
+// design_pressure_bar, design_temperature_c, description)`; beside it, generic properties
+// `properties(db_key, property_set, name, value, unit)`, several per key, for what importers know
+// of an object (IFC property sets, STEP attributes); see docs/project-database.md.
 #pragma once
 
 #include <filesystem>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace tw {
 
@@ -25,6 +28,14 @@ struct ProjectRecord {
   std::string description;
 };
 
+struct ProjectProperty {
+  std::string db_key;
+  std::string set;    // the property set ("Pset_PipeSegmentCommon", "STEP attributes", ...)
+  std::string name;
+  std::string value;  // as text
+  std::string unit;   // empty when the value has none
+};
+
 class ProjectDatabase {
  public:
   // Creates (truncating) or opens the database at `path`. Throws std::runtime_error naming the
@@ -37,9 +48,12 @@ class ProjectDatabase {
 
   // Inserts or replaces a record. Writes are batched in transactions; commit() ends the batch.
   void put(const ProjectRecord& record);
+  void putProperty(const ProjectProperty& property);  // appended; same batching as put
   void commit();
 
   std::optional<ProjectRecord> find(const std::string& db_key) const;
+  // The key's properties in the order they were put; none for a database without the table.
+  std::vector<ProjectProperty> properties(const std::string& db_key) const;
   uint64_t recordCount() const;
 
  private:

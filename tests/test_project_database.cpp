@@ -162,6 +162,43 @@ TEST(ProjectDatabase, DatabaseWithoutRecordsTableIsAnError) {
   }
 }
 
+// Generic properties: several per key, in the order put, values with quotes kept, read back
+// read-only; a database from before the table has none.
+TEST(ProjectDatabase, PropertiesOfAKeyComeBackInOrder) {
+  const auto dir = test::scratchDir();
+  auto path = dir / "props.db";
+  {
+    auto db = ProjectDatabase::create(path);
+    db.put(pumpRecord());
+    db.putProperty({"P-1203-A", "Pset_PumpTypeCommon", "FlowRate", "12.5", "m3/h"});
+    db.putProperty({"P-1203-A", "Pset_PumpTypeCommon", "Note", "it's \"A\"; DROP TABLE x", ""});
+    db.putProperty({"V-1204", "STEP attributes", "part", "vessel", ""});
+    db.commit();
+  }
+  auto db = ProjectDatabase::open(path);
+  const auto props = db.properties("P-1203-A");
+  ASSERT_EQ(props.size(), 2u);
+  EXPECT_EQ(props[0].set, "Pset_PumpTypeCommon");
+  EXPECT_EQ(props[0].name, "FlowRate");
+  EXPECT_EQ(props[0].value, "12.5");
+  EXPECT_EQ(props[0].unit, "m3/h");
+  EXPECT_EQ(props[1].value, "it's \"A\"; DROP TABLE x");
+  EXPECT_EQ(db.properties("V-1204").size(), 1u);
+  EXPECT_TRUE(db.properties("nothing").empty());
+  EXPECT_THROW(db.putProperty({"k", "s", "n", "v", ""}), std::runtime_error);  // read-only
+
+  auto old_path = dir / "old.db";
+  sqlite3* raw = nullptr;
+  ASSERT_EQ(sqlite3_open(old_path.string().c_str(), &raw), SQLITE_OK);
+  sqlite3_exec(raw,
+               "CREATE TABLE records (db_key TEXT PRIMARY KEY, type TEXT, line_number TEXT, "
+               "service TEXT, material TEXT, nominal_diameter_mm REAL, design_pressure_bar REAL, "
+               "design_temperature_c REAL, description TEXT)",
+               nullptr, nullptr, nullptr);
+  sqlite3_close(raw);
+  EXPECT_TRUE(ProjectDatabase::open(old_path).properties("P-1203-A").empty());
+}
+
 TEST(ProjectDatabase, UnwritableLocationIsAnError) {
   auto path = test::scratchDir() / "no-such-dir" / "plant.db";
   EXPECT_THROW(ProjectDatabase::create(path), std::runtime_error);
