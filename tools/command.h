@@ -29,5 +29,6 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global);
 void registerViewCommand(CLI::App& app, const GlobalOptions& global);
 void registerCompareCommand(CLI::App& app, const GlobalOptions& global);
 void registerBenchCommand(CLI::App& app, const GlobalOptions& global);
+void registerPickCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
   tw::registerViewCommand(app, global);
   tw::registerCompareCommand(app, global);
   tw::registerBenchCommand(app, global);
+  tw::registerPickCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

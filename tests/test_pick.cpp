@@ -1,0 +1,148 @@
+// Picking (runtime/object_pick.h, `terawalk pick`) on a generated plant: the object under a
+// pixel, from far (coarse levels and far proxies) and from near, for the NURBS hull, parametric
+// pipes and meshes; its point lies on the object; the command prints the same object and its
+// database record.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <string>
+
+#include "egl_context.h"
+#include "frame_loop.h"
+#include "object_pick.h"
+#include "test_support.h"
+
+namespace tw {
+namespace {
+
+struct Plant {
+  std::filesystem::path package, db;
+};
+
+const Plant& plant() {
+  static const Plant p = [] {
+    const auto dir = test::processScratchDir("pick_plant");
+    Plant out{dir / "plant.twk", dir / "plant.db"};
+    const auto tws = dir / "plant.tws";
+    test::CommandResult gen = test::runTerawalk("gen plant --quiet --triangles 200K --seed 1 -o " +
+                                                tws.string() + " --db " + out.db.string());
+    EXPECT_EQ(gen.exit_code, 0) << gen.output;
+    test::CommandResult pre =
+        test::runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string());
+    EXPECT_EQ(pre.exit_code, 0) << pre.output;
+    return out;
+  }();
+  return p;
+}
+
+constexpr int kWidth = 320, kHeight = 180;
+
+FrameStats renderSettled(Walkthrough& walk, const Camera& camera) {
+  FrameStats stats;
+  int steady = 0;
+  for (int i = 0; i < 200 && steady < 3; ++i) {
+    stats = walk.renderFrame(camera, 0.0);
+    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
+  }
+  return stats;
+}
+
+std::string vec3Arg(const glm::dvec3& v) {
+  char text[128];
+  std::snprintf(text, sizeof text, "%.17g,%.17g,%.17g", v.x, v.y, v.z);
+  return text;
+}
+
+struct View {
+  const char* name;
+  glm::dvec3 eye, target;
+  std::vector<std::string> layers;  // each must show, and be picked, from here
+};
+
+TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
+  EglContext context;
+  WalkthroughOptions options;
+  options.width = kWidth;
+  options.height = kHeight;
+  options.prefetch = false;
+  Walkthrough walk(plant().package, options);
+  const PackageView& view = walk.package();
+  const glm::dvec3 lo = walk.worldMin(), hi = walk.worldMax();
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double diagonal = glm::length(hi - lo);
+  uint64_t level0 = 0;
+  for (const auto& c : view.clusters()) level0 += c.level == 0 ? c.triangle_count : 0;
+
+  const View views[] = {
+      // The whole plant from four diagonals away: coarse levels only.
+      {"far", centre + glm::dvec3(-1.6, -2.4, 1.2) * diagonal, centre, {"hull"}},
+      // Inside the module's second storey, looking along it.
+      {"near", {36.0, -16.0, 13.7}, {60.0, -10.0, 13.0}, {"decks and walls", "structure"}},
+      // Over the module's piping from above the deck: parametric pipes and elbows.
+      {"pipes", {20.0, -30.0, 30.0}, {48.0, -14.0, 8.0}, {"piping process", "piping utility"}},
+  };
+  for (const View& v : views) {
+    SCOPED_TRACE(v.name);
+    Camera camera;
+    camera.position = v.eye;
+    camera.lookAt(v.target);
+    camera.far_m = 10.0 * diagonal + glm::length(v.eye - centre);
+    const FrameStats stats = renderSettled(walk, camera);
+    if (std::string(v.name) == "far") EXPECT_LT(stats.triangles_drawn * 4, level0);
+    std::vector<uint32_t> ids;
+    walk.renderer().readObjectIds(ids, true);
+    for (const std::string& layer : v.layers) {
+      SCOPED_TRACE(layer);
+      // The middle one of the pixels that show the layer.
+      std::vector<int> pixels;
+      for (int p = 0; p < kWidth * kHeight; ++p)
+        if (ids[p] != 0 && view.layerName(view.objects()[ids[p] - 1].layer) == layer)
+          pixels.push_back(p);
+      ASSERT_FALSE(pixels.empty()) << "the layer should show from here";
+      const int p = pixels[pixels.size() / 2], x = p % kWidth, y = p / kWidth;
+      const std::optional<Pick> pick = pickPixel(walk.renderer(), camera, x, y);
+      ASSERT_TRUE(pick);
+      EXPECT_EQ(pick->object, ids[p] - 1);
+      // The point is on the object: inside its box, grown by what the level shown may stray.
+      const pkg::ObjectRecord& o = view.objects()[pick->object];
+      const double slack = 0.05 + 0.01 * pick->distance_m;
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_GE(pick->world[a], view.origin()[a] + o.aabb_min[a] - slack) << a;
+        EXPECT_LE(pick->world[a], view.origin()[a] + o.aabb_max[a] + slack) << a;
+      }
+      // The command sees the same pixel the same way, and reads the object's record.
+      test::CommandResult r = test::runTerawalk(
+          "pick " + plant().package.string() + " --eye " + vec3Arg(v.eye) + " --target " +
+          vec3Arg(v.target) + " --size " + std::to_string(kWidth) + "x" + std::to_string(kHeight) +
+          " --pixel " + std::to_string(x) + "," + std::to_string(y) + " --db " +
+          plant().db.string() + " --json");
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      const auto j = nlohmann::json::parse(r.output);
+      EXPECT_EQ(j["object"], pick->object);
+      EXPECT_EQ(j["layer"], layer);
+      EXPECT_EQ(j["db_key"], std::string(view.objectDbKey(pick->object)));
+      ASSERT_TRUE(j["record"].is_object()) << r.output;
+      EXPECT_EQ(j["record"]["db_key"], j["db_key"]);
+      for (int a = 0; a < 3; ++a) EXPECT_NEAR(j["point"][a].get<double>(), pick->world[a], 1e-3);
+    }
+  }
+}
+
+TEST(Pick, NothingUnderThePixelAndBadPixels) {
+  const std::string base = "pick " + plant().package.string() +
+                           " --eye 0,0,5000 --target 0,0,10000 --size 64x36 --pixel ";
+  test::CommandResult sky = test::runTerawalk(base + "10,10 --json");
+  ASSERT_EQ(sky.exit_code, 0) << sky.output;
+  EXPECT_TRUE(nlohmann::json::parse(sky.output)["object"].is_null());
+  test::CommandResult outside = test::runTerawalk(base + "64,0");
+  EXPECT_NE(outside.exit_code, 0);
+  EXPECT_NE(outside.output.find("outside"), std::string::npos) << outside.output;
+  test::CommandResult garbled = test::runTerawalk(base + "ten,3");
+  EXPECT_NE(garbled.exit_code, 0);
+  EXPECT_NE(garbled.output.find("--pixel"), std::string::npos) << garbled.output;
+}
+
+}  // namespace
+}  // namespace tw
