@@ -30,7 +30,7 @@ nlohmann::json infoJson(const std::filesystem::path& file) {
 TEST(Cli, HelpOnEveryVerb) {
   for (const char* verb :
        {"", "info ", "gen ", "gen plant ", "snapshot ", "preprocess ", "verify ", "render ",
-        "view ", "compare "}) {
+        "view ", "compare ", "pick "}) {
     RunResult r = run(std::string(verb) + "--help");
     EXPECT_EQ(r.exit_code, 0) << verb << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << verb << r.output;

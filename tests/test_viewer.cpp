@@ -2,12 +2,17 @@
 // it, and the X screen itself read back and checked, not the renderer's own buffer.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <string>
 #include <thread>
 
+#include <nlohmann/json.hpp>
+
+#include "camera.h"
 #include "image_compare.h"
+#include "package_view.h"
 #include "test_support.h"
 #include "x_screen_support.h"
 
@@ -115,6 +120,120 @@ TEST(Viewer, TheXScreenShowsTheModelAndThePanel) {
     }
   EXPECT_GT(same, total * 99 / 100) << same << " of " << total;
   EXPECT_GT(covered, 800 * 600 / 20) << "the bunny should cover some of the frame";
+}
+
+
+// A generated plant and its project database.
+struct Plant {
+  std::filesystem::path package, db;
+};
+const Plant& plant() {
+  static const Plant p = [] {
+    const auto dir = test::processScratchDir("viewer_plant");
+    Plant out{dir / "plant.twk", dir / "plant.db"};
+    const auto tws = dir / "plant.tws";
+    test::CommandResult gen = test::runTerawalk("gen plant --quiet --triangles 200K --seed 1 -o " +
+                                                tws.string() + " --db " + out.db.string());
+    EXPECT_EQ(gen.exit_code, 0) << gen.output;
+    test::CommandResult pre =
+        test::runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string());
+    EXPECT_EQ(pre.exit_code, 0) << pre.output;
+    return out;
+  }();
+  return p;
+}
+
+std::string vec3Arg(const glm::dvec3& v) {
+  char text[128];
+  std::snprintf(text, sizeof text, "%.9g,%.9g,%.9g", v.x, v.y, v.z);
+  return text;
+}
+
+// Pixels in a box around (cx, cy) that came clearly closer to the selection tint (orange,
+// gl_shaders.h kSelectedTint) from `before` to `after`.
+int tintedPixels(const test::ScreenImage& before, const test::ScreenImage& after, int cx, int cy,
+                 int half) {
+  const int tint[3] = {255, 140, 13};
+  auto distance = [&](const uint8_t* p) {
+    return std::abs(p[0] - tint[0]) + std::abs(p[1] - tint[1]) + std::abs(p[2] - tint[2]);
+  };
+  int n = 0;
+  for (int y = cy - half; y < cy + half; ++y)
+    for (int x = cx - half; x < cx + half; ++x)
+      n += distance(after.at(x, y)) + 60 < distance(before.at(x, y));
+  return n;
+}
+
+// Clicking a valve, as a script of the viewer does at frame 30: the X screen shows the valve
+// tinted and the properties panel grown by its record, and the viewer names the valve and its
+// record. The capture is kept as x-screen-pick.png.
+TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const PackageView view = PackageView::open(plant().package);
+  // A valve seen from just above: the first whose centre pixel `pick` says is that valve.
+  std::string key;
+  Camera camera;
+  for (uint32_t o = 0; o < view.objects().size() && key.empty(); ++o) {
+    if (view.layerName(view.objects()[o].layer) != "valves") continue;
+    const pkg::ObjectRecord& r = view.objects()[o];
+    const glm::dvec3 centre =
+        view.origin() + 0.5 * (glm::dvec3(r.aabb_min[0], r.aabb_min[1], r.aabb_min[2]) +
+                               glm::dvec3(r.aabb_max[0], r.aabb_max[1], r.aabb_max[2]));
+    camera.position = centre + glm::dvec3(0.6, 0.5, 1.4);
+    camera.lookAt(centre);
+    test::CommandResult picked = test::runTerawalk(
+        "pick " + plant().package.string() + " --eye " + vec3Arg(camera.position) + " --target " +
+        vec3Arg(centre) + " --size 800x600 --pixel 400,300 --json");
+    ASSERT_EQ(picked.exit_code, 0) << picked.output;
+    const auto j = nlohmann::json::parse(picked.output);
+    if (!j["object"].is_null() && j["object"] == o) key = std::string(view.objectDbKey(o));
+  }
+  ASSERT_FALSE(key.empty()) << "no valve could be seen from above";
+  char line[256];
+  std::snprintf(line, sizeof line, "0 %.9f %.9f %.9f %.9f %.9f 60\n", camera.position.x,
+                camera.position.y, camera.position.z, glm::degrees(camera.yaw_rad),
+                glm::degrees(camera.pitch_rad));
+  test::writeFile(dir / "valve.path", std::string("# terawalk camera path 1\n") + line);
+  test::writeFile(dir / "click.script", "30 click 400 300\n150 quit\n");
+
+  test::XvfbScreen screen(dir / "x", 1024, 768);
+  test::BackgroundProcess viewer(
+      {TW_TERAWALK_EXE, "view", plant().package.string(), "--size", "800x600", "--path",
+       (dir / "valve.path").string(), "--db", plant().db.string(), "--script",
+       (dir / "click.script").string()},
+      {"DISPLAY=" + screen.display()}, dir / "view.log");
+  std::optional<test::ScreenImage> before, after;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (viewer.running() && std::chrono::steady_clock::now() < deadline) {
+    const bool picked = test::readFile(dir / "view.log").find("view: picked") != std::string::npos;
+    auto capture = screen.capture();
+    if (capture && windowDrawn(*capture, 800, 600) &&
+        showsPanel(countPanelPixels(*capture, 12, 40, 200, 90)))
+      (picked ? after : before) = std::move(capture);
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  const std::string log = test::readFile(dir / "view.log");
+  ASSERT_EQ(viewer.wait(), 0) << log;
+  EXPECT_NE(log.find("key " + key + " at"), std::string::npos) << log;
+  EXPECT_NE(log.find("record found"), std::string::npos) << log;
+  ASSERT_TRUE(before && after) << log;
+  // The window's part of the screen, for docs/images/viewer-pick.png.
+  std::vector<uint8_t> window(800 * 600 * 4);
+  for (int y = 0; y < 600; ++y)
+    std::copy_n(after->at(0, y), 800 * 4, &window[size_t(y) * 800 * 4]);
+  writePngRgba(dir / "x-screen-pick.png", 800, 600, window);
+  writePngRgba(dir / "x-screen-before.png", before->width, before->height, before->rgba);
+  // The valve, tinted, at the centre.
+  EXPECT_GT(tintedPixels(*before, *after, 400, 300, 60), 100);
+  EXPECT_EQ(tintedPixels(*before, *after, 700, 500, 60), 0);  // elsewhere nothing changed
+  // The properties panel at the top right has grown by the record's lines (right of the
+  // statistics panel, where the model showed before), down to its help line.
+  const PanelCount grown_after = countPanelPixels(*after, 530, 90, 790, 280);
+  const PanelCount grown_before = countPanelPixels(*before, 530, 90, 790, 280);
+  EXPECT_GT(grown_after.dark * 2, grown_after.total) << grown_after.dark;
+  EXPECT_LT(grown_before.dark * 2, grown_before.total) << grown_before.dark;
+  EXPECT_GT(countPanelPixels(*after, 530, 276, 790, 292).text, 20);
 }
 
 }  // namespace

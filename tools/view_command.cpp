@@ -7,6 +7,9 @@
 // statistics and sets tau, field of view, near/far, the small-feature threshold and the occlusion
 // mode (off, hzb, pvs; --occlusion picks the first) and the parametrics mode (impostor,
 // tessellated, off; --parametrics picks the first, auto by default, P cycles) at run time.
+// A click selects the object under the cursor (Ctrl adds or removes, a double click frames the
+// selection, Esc clears it) and the properties panel shows its record from --db
+// (view_selection.h); --script plays clicks and keys at given frames (view_script.h).
 // The same Walkthrough as `terawalk render` draws every frame.
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
@@ -14,6 +17,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -27,6 +31,10 @@
 #include "command_args.h"
 #include "frame_loop.h"
 #include "image_compare.h"
+#include "object_pick.h"
+#include "project_database.h"
+#include "view_script.h"
+#include "view_selection.h"
 
 namespace tw {
 namespace {
@@ -43,6 +51,8 @@ struct ViewArgs {
   std::string screenshot;  // with --frames: write the last frame here
   std::string occlusion = "hzb";
   std::string parametrics = "auto";
+  std::string db;      // the project database, for the properties panel
+  std::string script;  // clicks and keys at given frames (view_script.h)
 };
 
 struct GlfwSession {
@@ -189,7 +199,7 @@ struct PathRecorder {
 
 // The overlay: the frame's statistics and the settings' controls.
 void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
-               bool recording) {
+               bool recording, const ViewSelection& selection, int window_width) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -233,8 +243,60 @@ void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator&
   ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
               nav.orbit ? "orbit" : "walk", nav.speed_mps, recording ? " (on)" : "");
   ImGui::End();
+  selection.drawPanel(float(window_width) - 8.0f, 8.0f);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+// Left-button clicks: a press and release within a few pixels (a longer drag looks around), and
+// double clicks (a second click within 0.35 s, near the first). Window pixels, top left.
+class ClickDetector {
+ public:
+  struct Click {
+    int x, y;
+    bool ctrl, twice;
+  };
+  std::optional<Click> update(GLFWwindow* window, double now_s) {
+    double x = 0.0, y = 0.0;
+    glfwGetCursorPos(window, &x, &y);
+    const bool down = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+    std::optional<Click> click;
+    if (down && !was_down_) {
+      press_x_ = x;
+      press_y_ = y;
+      pressed_over_ui_ = ImGui::GetIO().WantCaptureMouse;
+    } else if (!down && was_down_ && !pressed_over_ui_ &&
+               std::abs(x - press_x_) + std::abs(y - press_y_) < 4.0) {
+      const bool ctrl = glfwGetKey(window, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
+                        glfwGetKey(window, GLFW_KEY_RIGHT_CONTROL) == GLFW_PRESS;
+      const bool twice = now_s - last_click_s_ < 0.35 && std::abs(x - last_x_) < 4.0 &&
+                         std::abs(y - last_y_) < 4.0;
+      click = Click{int(x), int(y), ctrl, twice};
+      last_click_s_ = twice ? -1.0 : now_s;
+      last_x_ = x;
+      last_y_ = y;
+    }
+    was_down_ = down;
+    return click;
+  }
+
+ private:
+  bool was_down_ = false, pressed_over_ui_ = false;
+  double press_x_ = 0.0, press_y_ = 0.0, last_x_ = 0.0, last_y_ = 0.0;
+  double last_click_s_ = -1.0;
+};
+
+// Double click: the camera backs off along its view until the selection's box fills about two
+// thirds of the image; orbit mode circles the selection from then on.
+void frameSelection(const ViewSelection& selection, Camera& camera, Navigator& nav) {
+  glm::dvec3 lo, hi;
+  if (!selection.bounds(lo, hi)) return;
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double radius = std::max(0.5 * glm::length(hi - lo), 0.05);
+  const double distance = 1.5 * radius / std::tan(0.5 * camera.fov_y_rad);
+  camera.position = centre - camera.forward() * distance;
+  nav.orbit_target = centre;
+  nav.orbit_distance = distance;
 }
 
 WalkthroughOptions viewOptions(const ViewArgs& args, GLFWwindow* window) {
@@ -252,7 +314,7 @@ WalkthroughOptions viewOptions(const ViewArgs& args, GLFWwindow* window) {
 // The loop, frame after frame: input, the camera (replayed or navigated), the settings applied,
 // the frame rendered and shown with the overlay on top.
 void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
-                 const WalkthroughOptions& options) {
+                 const WalkthroughOptions& options, const ProjectDatabase* db) {
   Aabb bounds;
   bounds.add(walk.worldMin());
   bounds.add(walk.worldMax());
@@ -281,6 +343,12 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   settings.parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
   int shot = 0;
   KeyPresses keys(window);
+  ViewSelection selection(walk.package(), walk.objectStates(), db);
+  ClickDetector clicks;
+  const std::vector<ViewEvent> script =
+      args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
+  size_t next_event = 0;
+  bool quit = false;
 
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -299,7 +367,12 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     }
     if (keys.pressed(GLFW_KEY_P)) settings.parametric_mode = (settings.parametric_mode + 1) % 3;
     if (keys.pressed(GLFW_KEY_R)) recorder.toggle(args.record_file);
-    if (keys.pressed(GLFW_KEY_ESCAPE)) glfwSetWindowShouldClose(window, GLFW_TRUE);
+    // Esc clears the selection; with nothing selected, it quits.
+    auto escape = [&] {
+      if (selection.empty()) glfwSetWindowShouldClose(window, GLFW_TRUE);
+      else selection.clear();
+    };
+    if (keys.pressed(GLFW_KEY_ESCAPE)) escape();
 
     if (!replay.keys.empty()) {
       const double span = std::max(replay.durationS(), 1e-6);
@@ -323,16 +396,45 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     stats = walk.renderFrame(camera, t);
     settings.tau = float(walk.tau());
 
+    // Clicks pick in the frame just drawn, from the mouse and from the script.
+    int win_w = 0, win_h = 0;
+    glfwGetWindowSize(window, &win_w, &win_h);
+    auto pickAt = [&](int x, int y, bool ctrl, bool twice) {
+      const int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
+      if (px < 0 || py < 0 || px >= walk.renderer().width() || py >= walk.renderer().height())
+        return;
+      selection.click(pickPixel(walk.renderer(), camera, px, py), ctrl);
+      if (twice) frameSelection(selection, camera, nav);
+    };
+    if (const auto click = clicks.update(window, t))
+      pickAt(click->x, click->y, click->ctrl, click->twice);
+    for (; next_event < script.size() && script[next_event].frame <= frame; ++next_event) {
+      const ViewEvent& e = script[next_event];
+      switch (e.kind) {
+        case ViewEvent::Kind::Click: pickAt(e.x, e.y, false, false); break;
+        case ViewEvent::Kind::CtrlClick: pickAt(e.x, e.y, true, false); break;
+        case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
+        case ViewEvent::Kind::Quit: quit = true; break;
+        case ViewEvent::Kind::Key:
+          if (e.key == GLFW_KEY_ESCAPE) escape();
+          if (e.key == GLFW_KEY_O) nav.orbit = !nav.orbit;
+          if (e.key == GLFW_KEY_P) settings.parametric_mode = (settings.parametric_mode + 1) % 3;
+          if (e.key == GLFW_KEY_R) recorder.toggle(args.record_file);
+          if (e.key == GLFW_KEY_F12) saveScreenshot(walk.renderer(), "terawalk-script.png");
+          break;
+      }
+    }
+
     if (keys.pressed(GLFW_KEY_F12)) {
       char name[64];
       std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
       saveScreenshot(walk.renderer(), name);
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
-    drawPanel(stats, settings, nav, recorder.on);
+    drawPanel(stats, settings, nav, recorder.on, selection, fb_w);
     glfwSwapBuffers(window);
 
-    if (args.frames > 0 && frame + 1 >= args.frames) {
+    if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {
       if (!args.screenshot.empty()) saveScreenshot(walk.renderer(), args.screenshot);
       break;
     }
@@ -347,9 +449,11 @@ void runView(const ViewArgs& args) {
   parseImageSize(args.size, "--size", width, height);
   GlfwSession glfw;
   ViewerWindow window(width, height);
+  std::optional<ProjectDatabase> db;
+  if (!args.db.empty()) db.emplace(ProjectDatabase::open(args.db));
   const WalkthroughOptions options = viewOptions(args, window.get());
   Walkthrough walk(args.file, options);
-  runViewLoop(args, window.get(), walk, options);
+  runViewLoop(args, window.get(), walk, options, db ? &*db : nullptr);
 }
 
 }  // namespace
@@ -369,6 +473,12 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--target-fps", args->target_fps, "Adapt tau to hold this frame rate");
   cmd->add_option("--frames", args->frames, "Quit after this many frames (scripted runs)");
   cmd->add_option("--screenshot", args->screenshot, "With --frames: save the last frame here");
+  cmd->add_option("--db", args->db, "Project database (SQLite): the picked object's record")
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--script", args->script,
+                  "Clicks and keys at given frames: FRAME click X Y, ctrl-click, double-click, "
+                  "key NAME, quit")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--occlusion", args->occlusion, "Occlusion culling at start: off, hzb, pvs")
       ->check(CLI::IsMember({"off", "hzb", "pvs"}))
       ->capture_default_str();

@@ -1,0 +1,31 @@
+// A viewer script (`terawalk view --script FILE`): clicks and keys at given frames, so a run of
+// the window can be repeated exactly (tests, demos, the pictures in docs/).
+//
+//   # comment
+//   FRAME click X Y          select the object under window pixel X,Y (from the top left)
+//   FRAME ctrl-click X Y     add it to the selection, or remove it
+//   FRAME double-click X Y   select it and frame the selection
+//   FRAME key NAME           escape, o, p, r, f12
+//   FRAME quit
+//
+// Events run after their frame is drawn, in file order.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+namespace tw {
+
+struct ViewEvent {
+  enum class Kind { Click, CtrlClick, DoubleClick, Key, Quit };
+  int frame = 0;
+  Kind kind = Kind::Click;
+  int x = 0, y = 0;  // clicks
+  int key = 0;       // GLFW key code
+};
+
+// Throws std::runtime_error naming the file, the line and the reason.
+std::vector<ViewEvent> readViewScript(const std::filesystem::path& path);
+
+}  // namespace tw
