@@ -8,6 +8,8 @@
 
 #include <sqlite3.h>
 
+#include <cstdlib>
+#include <memory>
 #include <stdexcept>
 #include <system_error>
 
@@ -191,6 +193,37 @@ std::vector<ProjectProperty> ProjectDatabase::properties(const std::string& db_k
   sqlite3_clear_bindings(stmt);
   if (rc != SQLITE_DONE) s.fail("cannot read the properties of '" + db_key + "'");
   return out;
+}
+
+std::vector<std::string> ProjectDatabase::findKeys(const std::string& where,
+                                                   const std::vector<std::string>& parameters) const {
+  State& s = *state_;
+  const std::string sql = "SELECT db_key FROM records WHERE (" + where + ") ORDER BY db_key";
+  sqlite3_stmt* stmt = nullptr;
+  const char* tail = nullptr;
+  if (sqlite3_prepare_v2(s.db, sql.c_str(), -1, &stmt, &tail) != SQLITE_OK)
+    s.fail("bad query \"" + where + "\"");
+  std::unique_ptr<sqlite3_stmt, int (*)(sqlite3_stmt*)> owned(stmt, sqlite3_finalize);
+  if (tail && std::string(tail).find_first_not_of(" \t\r\n;") != std::string::npos)
+    throw std::runtime_error(s.path + ": bad query \"" + where + "\": one condition, not statements");
+  if (int(parameters.size()) != sqlite3_bind_parameter_count(stmt))
+    throw std::runtime_error(s.path + ": the query has " +
+                             std::to_string(sqlite3_bind_parameter_count(stmt)) +
+                             " parameters, " + std::to_string(parameters.size()) + " given");
+  for (size_t i = 0; i < parameters.size(); ++i) {
+    const std::string& p = parameters[i];
+    char* end = nullptr;
+    const double number = std::strtod(p.c_str(), &end);
+    if (!p.empty() && end == p.c_str() + p.size())
+      s.check(sqlite3_bind_double(stmt, int(i) + 1, number), "cannot bind value");
+    else
+      s.bindText(stmt, int(i) + 1, p);
+  }
+  std::vector<std::string> keys;
+  int rc;
+  while ((rc = sqlite3_step(stmt)) == SQLITE_ROW) keys.push_back(columnText(stmt, 0));
+  if (rc != SQLITE_DONE) s.fail("query \"" + where + "\" failed");
+  return keys;
 }
 
 void ProjectDatabase::commit() {

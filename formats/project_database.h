@@ -54,6 +54,13 @@ class ProjectDatabase {
   std::optional<ProjectRecord> find(const std::string& db_key) const;
   // The key's properties in the order they were put; none for a database without the table.
   std::vector<ProjectProperty> properties(const std::string& db_key) const;
+  // The keys of the records matching `where`, an SQL condition over the columns of `records`
+  // (the properties through subqueries on `properties` and `records.db_key`), with ?1, ?2, ...
+  // bound to `parameters` as text, numbers where they read as one. One condition, not
+  // statements: a query that fails to prepare, or holds more than one statement, throws
+  // std::runtime_error with SQLite's message.
+  std::vector<std::string> findKeys(const std::string& where,
+                                    const std::vector<std::string>& parameters) const;
   uint64_t recordCount() const;
 
  private:

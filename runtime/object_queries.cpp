@@ -36,6 +36,15 @@ std::vector<uint32_t> objectsWithKeys(const PackageView& view,
   return out;
 }
 
+std::vector<uint32_t> objectsNamed(const PackageView& view, std::string_view text) {
+  std::vector<uint32_t> out;
+  for (uint32_t o = 0; o < view.objects().size(); ++o)
+    if (view.objectName(o).find(text) != std::string_view::npos ||
+        view.objectDbKey(o).find(text) != std::string_view::npos)
+      out.push_back(o);
+  return out;
+}
+
 std::unordered_set<std::string> parseKeyList(const std::string& text) {
   std::unordered_set<std::string> keys;
   std::error_code ec;

@@ -19,6 +19,8 @@ uint32_t layerIndex(const PackageView& view, std::string_view name);
 std::vector<uint32_t> objectsOfLayer(const PackageView& view, uint32_t layer);
 std::vector<uint32_t> objectsWithKeys(const PackageView& view,
                                       const std::unordered_set<std::string>& keys);
+// Object indices (ascending) whose name or database key contains `text` (case-sensitive).
+std::vector<uint32_t> objectsNamed(const PackageView& view, std::string_view text);
 
 // Keys from `text`: the lines of that file when it names one (blank lines and # comments
 // skipped), else a comma-separated list. Throws std::runtime_error for an empty result.

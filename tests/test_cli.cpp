@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "package_view.h"
 #include "package_writer.h"
 #include "project_database.h"
 #include "test_support.h"
@@ -30,7 +31,7 @@ nlohmann::json infoJson(const std::filesystem::path& file) {
 TEST(Cli, HelpOnEveryVerb) {
   for (const char* verb :
        {"", "info ", "gen ", "gen plant ", "snapshot ", "preprocess ", "verify ", "render ",
-        "view ", "compare ", "pick "}) {
+        "view ", "compare ", "pick ", "find "}) {
     RunResult r = run(std::string(verb) + "--help");
     EXPECT_EQ(r.exit_code, 0) << verb << r.output;
     EXPECT_NE(r.output.find("Usage"), std::string::npos) << verb << r.output;
@@ -133,6 +134,51 @@ TEST(Cli, InfoCountsTheHullAsThePreprocessorTessellatesIt) {
   EXPECT_GT(hull, 0u);
   EXPECT_EQ(mesh + hull, package["triangles"]["level0"].get<uint64_t>());
   EXPECT_EQ(infoJson(ply)["triangles"]["total"], scene["triangles"]["total"]);
+}
+
+// `find`: the objects whose record matches a condition, values bound as parameters; SQLite's
+// message for a bad query; no second statement; --name by substring.
+TEST(Cli, FindMatchesRecordsWithBoundValues) {
+  auto dir = test::scratchDir();
+  auto tws = dir / "plant.tws", db_path = dir / "plant.db", twk = dir / "plant.twk";
+  ASSERT_EQ(run("gen plant --quiet --triangles 200000 --seed 1 -o " + tws.string() + " --db " +
+                db_path.string()).exit_code, 0);
+  ASSERT_EQ(run("preprocess --quiet --visibility off " + tws.string() + " -o " + twk.string())
+                .exit_code, 0);
+  const std::string base = "find --quiet " + twk.string() + " --db " + db_path.string() + " ";
+  RunResult r = run(base + "\"type = ?1 AND nominal_diameter_mm >= ?2\" --param valve "
+                           "--param 100 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const auto j = nlohmann::json::parse(r.output);
+  ASSERT_GT(j["objects"].size(), 0u);
+  // Every object found has a matching record, and every object with one is found.
+  ProjectDatabase db = ProjectDatabase::open(db_path);
+  const PackageView view = PackageView::open(twk);
+  size_t expected = 0;
+  for (uint32_t o = 0; o < view.objects().size(); ++o) {
+    const auto record = db.find(std::string(view.objectDbKey(o)));
+    expected += record && record->type == "valve" && record->nominal_diameter_mm >= 100;
+  }
+  EXPECT_EQ(j["objects"].size(), expected);
+  for (const auto& o : j["objects"]) {
+    const auto record = db.find(o["db_key"].get<std::string>());
+    ASSERT_TRUE(record);
+    EXPECT_EQ(record->type, "valve");
+    EXPECT_GE(record->nominal_diameter_mm, 100.0);
+  }
+  RunResult bad = run(base + "\"servce = 1\"");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.output.find("no such column: servce"), std::string::npos) << bad.output;
+  RunResult two = run(base + "\"1); DELETE FROM records; --\"");
+  EXPECT_EQ(two.exit_code, 1) << two.output;
+  EXPECT_EQ(db.recordCount(), ProjectDatabase::open(db_path).recordCount());
+  RunResult missing = run(base + "\"type = ?1\"");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.output.find("parameters"), std::string::npos) << missing.output;
+  RunResult named = run("find --quiet " + twk.string() + " --name HV-00001 --json");
+  ASSERT_EQ(named.exit_code, 0) << named.output;
+  for (const auto& o : nlohmann::json::parse(named.output)["objects"])
+    EXPECT_NE(o["name"].get<std::string>().find("HV-00001"), std::string::npos);
 }
 
 // The 10M-triangle benchmark plant (seed 1) has these exact counts. They change only when the

@@ -30,5 +30,6 @@ void registerViewCommand(CLI::App& app, const GlobalOptions& global);
 void registerCompareCommand(CLI::App& app, const GlobalOptions& global);
 void registerBenchCommand(CLI::App& app, const GlobalOptions& global);
 void registerPickCommand(CLI::App& app, const GlobalOptions& global);
+void registerFindCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw
