@@ -71,6 +71,7 @@ Walkthrough::Walkthrough(const std::filesystem::path& package, const Walkthrough
   renderer_ = std::make_unique<GlRenderer>(renderer_options);
   renderer_->setObjectColors(objectColors(*view_));
   object_states_ = ObjectStates(view_->objects().size());
+  last_parametric_view_.objects = &object_states_;
   culler_ = std::make_unique<OcclusionCuller>(*view_);
   culler_->setHzbOptions(options_.hzb);
   parametric_ = std::make_unique<ParametricRenderer>(*view_, *renderer_, options_.parametric_meshes);

@@ -171,6 +171,11 @@ void main() {
     base_color = objectBaseColor(object);
   }
   gl_Position = view_projection * vec4(pos_eye, 1.0);
+  // Only triangles of this vertex's object use it: when that object is hidden they all go
+  // (their fragments would be discarded), so the vertex leaves the clip volume and a triangle
+  // of hidden corners only is rejected before any fragment.
+  if (object_plus_one != 0u && objectHidden(object_plus_one - 1u))
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
 }
 )";
 }

@@ -382,6 +382,11 @@ struct ParametricInstanceMeshes::Impl {
       return;
     }
     const bool row_head = !(entry & kAlone) && b.row >= 2;
+    // A hidden object's instance costs nothing; a row drawn whole still goes, and its fragments
+    // leave out the hidden members (parametric_shaders.h).
+    if (!row_head && choice.view.objects &&
+        (choice.view.objects->flags(view->instances()[i].object) & kObjectHidden))
+      return;
     Form row_form;
     if (row_head) {
       double distance = 0.0;

@@ -42,6 +42,7 @@
 
 #include <glm/glm.hpp>
 
+#include "object_states.h"
 #include "package_view.h"
 #include "parametric_meshes.h"
 
@@ -73,6 +74,9 @@ struct InstanceLodView {
   // Second pass: whether an eye-relative box is hidden by this frame's pyramid. Called from
   // several threads at once.
   std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
+  // Instances of hidden objects are not expanded (object_states.h); read by the workers, so it
+  // must not change while a frame's expansion runs.
+  const ObjectStates* objects = nullptr;
 };
 
 struct InstanceLodStats {

@@ -145,6 +145,7 @@ struct ParametricRenderer::Impl {
     lod_view.min_feature_px = camera.min_feature_px;
     lod_view.pass = camera.pass;
     lod_view.box_hidden = camera.box_hidden;
+    lod_view.objects = camera.objects;
     return lod_view;
   }
 

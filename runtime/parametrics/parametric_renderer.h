@@ -26,6 +26,7 @@
 #include <glm/glm.hpp>
 
 #include "gl_renderer.h"
+#include "object_states.h"
 #include "package_view.h"
 #include "parametric_instance_meshes.h"
 #include "parametric_meshes.h"
@@ -61,6 +62,8 @@ struct ParametricView {
   // "Occlusion"), and the test of an eye-relative box against this frame's pyramid.
   InstancePass pass = InstancePass::All;
   std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
+  // Tessellated mode: instances of hidden objects are not expanded (object_states.h).
+  const ObjectStates* objects = nullptr;
 };
 
 struct ParametricDrawStats {
