@@ -164,7 +164,9 @@ TEST(ObjectStates, IsolatedKeysAreAllThatShows) {
   for (const std::string& path : {kFar, nearPath()}) {
     const auto frames = renderIds(dir, "isolated", path, "--isolate-keys " + keys);
     EXPECT_EQ(sum(pixelsWhere(frames, [&](uint32_t o) { return !isolated(o); })), 0u) << path;
-    if (path != kFar) EXPECT_GT(sum(pixelsWhere(frames, isolated)), 0u) << path;
+    if (path != kFar) {
+      EXPECT_GT(sum(pixelsWhere(frames, isolated)), 0u) << path;
+    }
   }
 }
 

@@ -90,7 +90,9 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
     camera.lookAt(v.target);
     camera.far_m = 10.0 * diagonal + glm::length(v.eye - centre);
     const FrameStats stats = renderSettled(walk, camera);
-    if (std::string(v.name) == "far") EXPECT_LT(stats.triangles_drawn * 4, level0);
+    if (std::string(v.name) == "far") {
+      EXPECT_LT(stats.triangles_drawn * 4, level0);
+    }
     std::vector<uint32_t> ids;
     walk.renderer().readObjectIds(ids, true);
     for (const std::string& layer : v.layers) {
