@@ -11,6 +11,7 @@
 #include "image_compare.h"
 #include "object_states.h"
 #include "package_view.h"
+#include "generated_plant_support.h"
 #include "test_support.h"
 
 namespace tw {
@@ -39,29 +40,13 @@ TEST(ObjectStates, CountsHiddenObjectsInRanges) {
   EXPECT_EQ(states.flags(7), kObjectSelected);
 }
 
-// A one-module plant (about 200K equivalent triangles: meshes, parametrics, the NURBS hull).
-std::filesystem::path plantPackage() {
-  static const std::filesystem::path path = [] {
-    const auto dir = test::processScratchDir("object_states_plant");
-    const auto tws = dir / "plant.tws", twk = dir / "plant.twk";
-    test::CommandResult gen = test::runTerawalk("gen plant --quiet --triangles 200K --seed 1 --no-db -o " +
-                                                tws.string());
-    EXPECT_EQ(gen.exit_code, 0) << gen.output;
-    test::CommandResult pre =
-        test::runTerawalk("preprocess --quiet " + tws.string() + " -o " + twk.string());
-    EXPECT_EQ(pre.exit_code, 0) << pre.output;
-    return twk;
-  }();
-  return path;
-}
-
 // Renders `path_args` (an orbit or a fly-through) with `extra` flags; returns every frame's ids.
 std::vector<std::vector<uint32_t>> renderIds(const std::filesystem::path& dir,
                                              const std::string& name, const std::string& path_args,
                                              const std::string& extra,
                                              nlohmann::json* summary = nullptr) {
   const auto out = dir / name;
-  test::CommandResult r = test::runTerawalk("render --quiet " + plantPackage().string() + " " +
+  test::CommandResult r = test::runTerawalk("render --quiet " + test::generatedPlant().package.string() + " " +
                                             path_args + " --size 320x180 --png --out " +
                                             out.string() + " " + extra);
   EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -115,7 +100,7 @@ std::string nearPath() {
 
 TEST(ObjectStates, AHiddenLayerShowsAtNoDistance) {
   const auto dir = test::scratchDir();
-  const PackageView view = PackageView::open(plantPackage());
+  const PackageView view = PackageView::open(test::generatedPlant().package);
   uint32_t structure = UINT32_MAX;
   for (uint32_t l = 0; l < view.layers().size(); ++l)
     if (view.layerName(l) == "structure") structure = l;
@@ -148,7 +133,7 @@ TEST(ObjectStates, AHiddenLayerShowsAtNoDistance) {
 
 TEST(ObjectStates, IsolatedKeysAreAllThatShows) {
   const auto dir = test::scratchDir();
-  const PackageView view = PackageView::open(plantPackage());
+  const PackageView view = PackageView::open(test::generatedPlant().package);
   // The valves' keys: small objects, seen from near only.
   std::set<uint32_t> valves;
   std::string keys;

@@ -12,30 +12,11 @@
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "object_pick.h"
+#include "generated_plant_support.h"
 #include "test_support.h"
 
 namespace tw {
 namespace {
-
-struct Plant {
-  std::filesystem::path package, db;
-};
-
-const Plant& plant() {
-  static const Plant p = [] {
-    const auto dir = test::processScratchDir("pick_plant");
-    Plant out{dir / "plant.twk", dir / "plant.db"};
-    const auto tws = dir / "plant.tws";
-    test::CommandResult gen = test::runTerawalk("gen plant --quiet --triangles 200K --seed 1 -o " +
-                                                tws.string() + " --db " + out.db.string());
-    EXPECT_EQ(gen.exit_code, 0) << gen.output;
-    test::CommandResult pre =
-        test::runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string());
-    EXPECT_EQ(pre.exit_code, 0) << pre.output;
-    return out;
-  }();
-  return p;
-}
 
 constexpr int kWidth = 320, kHeight = 180;
 
@@ -47,12 +28,6 @@ FrameStats renderSettled(Walkthrough& walk, const Camera& camera) {
     steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
   }
   return stats;
-}
-
-std::string vec3Arg(const glm::dvec3& v) {
-  char text[128];
-  std::snprintf(text, sizeof text, "%.17g,%.17g,%.17g", v.x, v.y, v.z);
-  return text;
 }
 
 struct View {
@@ -67,7 +42,7 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
   options.width = kWidth;
   options.height = kHeight;
   options.prefetch = false;
-  Walkthrough walk(plant().package, options);
+  Walkthrough walk(test::generatedPlant().package, options);
   const PackageView& view = walk.package();
   const glm::dvec3 lo = walk.worldMin(), hi = walk.worldMax();
   const glm::dvec3 centre = 0.5 * (lo + hi);
@@ -115,11 +90,12 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
         EXPECT_LE(pick->world[a], view.origin()[a] + o.aabb_max[a] + slack) << a;
       }
       // The command sees the same pixel the same way, and reads the object's record.
+      const test::GeneratedPlant& files = test::generatedPlant();
       test::CommandResult r = test::runTerawalk(
-          "pick " + plant().package.string() + " --eye " + vec3Arg(v.eye) + " --target " +
-          vec3Arg(v.target) + " --size " + std::to_string(kWidth) + "x" + std::to_string(kHeight) +
-          " --pixel " + std::to_string(x) + "," + std::to_string(y) + " --db " +
-          plant().db.string() + " --json");
+          "pick " + files.package.string() + " --eye " + test::vec3Arg(v.eye) + " --target " +
+          test::vec3Arg(v.target) + " --size " + std::to_string(kWidth) + "x" +
+          std::to_string(kHeight) + " --pixel " + std::to_string(x) + "," + std::to_string(y) +
+          " --db " + files.db.string() + " --json");
       ASSERT_EQ(r.exit_code, 0) << r.output;
       const auto j = nlohmann::json::parse(r.output);
       EXPECT_EQ(j["object"], pick->object);
@@ -133,7 +109,7 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
 }
 
 TEST(Pick, NothingUnderThePixelAndBadPixels) {
-  const std::string base = "pick " + plant().package.string() +
+  const std::string base = "pick " + test::generatedPlant().package.string() +
                            " --eye 0,0,5000 --target 0,0,10000 --size 64x36 --pixel ";
   test::CommandResult sky = test::runTerawalk(base + "10,10 --json");
   ASSERT_EQ(sky.exit_code, 0) << sky.output;

@@ -13,6 +13,7 @@
 #include "camera.h"
 #include "image_compare.h"
 #include "package_view.h"
+#include "generated_plant_support.h"
 #include "test_support.h"
 #include "x_screen_support.h"
 
@@ -123,32 +124,6 @@ TEST(Viewer, TheXScreenShowsTheModelAndThePanel) {
 }
 
 
-// A generated plant and its project database.
-struct Plant {
-  std::filesystem::path package, db;
-};
-const Plant& plant() {
-  static const Plant p = [] {
-    const auto dir = test::processScratchDir("viewer_plant");
-    Plant out{dir / "plant.twk", dir / "plant.db"};
-    const auto tws = dir / "plant.tws";
-    test::CommandResult gen = test::runTerawalk("gen plant --quiet --triangles 200K --seed 1 -o " +
-                                                tws.string() + " --db " + out.db.string());
-    EXPECT_EQ(gen.exit_code, 0) << gen.output;
-    test::CommandResult pre =
-        test::runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string());
-    EXPECT_EQ(pre.exit_code, 0) << pre.output;
-    return out;
-  }();
-  return p;
-}
-
-std::string vec3Arg(const glm::dvec3& v) {
-  char text[128];
-  std::snprintf(text, sizeof text, "%.9g,%.9g,%.9g", v.x, v.y, v.z);
-  return text;
-}
-
 // Pixels in a box around (cx, cy) that came clearly closer to the selection tint (orange,
 // gl_shaders.h kSelectedTint) from `before` to `after`.
 int tintedPixels(const test::ScreenImage& before, const test::ScreenImage& after, int cx, int cy,
@@ -170,7 +145,7 @@ int tintedPixels(const test::ScreenImage& before, const test::ScreenImage& after
 TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
   if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
   const auto dir = test::scratchDir();
-  const PackageView view = PackageView::open(plant().package);
+  const PackageView view = PackageView::open(test::generatedPlant().package);
   // A valve seen from just above: the first whose centre pixel `pick` says is that valve.
   std::string key;
   Camera camera;
@@ -183,8 +158,9 @@ TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
     camera.position = centre + glm::dvec3(0.6, 0.5, 1.4);
     camera.lookAt(centre);
     test::CommandResult picked = test::runTerawalk(
-        "pick " + plant().package.string() + " --eye " + vec3Arg(camera.position) + " --target " +
-        vec3Arg(centre) + " --size 800x600 --pixel 400,300 --json");
+        "pick " + test::generatedPlant().package.string() + " --eye " +
+        test::vec3Arg(camera.position) + " --target " + test::vec3Arg(centre) +
+        " --size 800x600 --pixel 400,300 --json");
     ASSERT_EQ(picked.exit_code, 0) << picked.output;
     const auto j = nlohmann::json::parse(picked.output);
     if (!j["object"].is_null() && j["object"] == o) key = std::string(view.objectDbKey(o));
@@ -199,8 +175,8 @@ TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
 
   test::XvfbScreen screen(dir / "x", 1024, 768);
   test::BackgroundProcess viewer(
-      {TW_TERAWALK_EXE, "view", plant().package.string(), "--size", "800x600", "--path",
-       (dir / "valve.path").string(), "--db", plant().db.string(), "--script",
+      {TW_TERAWALK_EXE, "view", test::generatedPlant().package.string(), "--size", "800x600", "--path",
+       (dir / "valve.path").string(), "--db", test::generatedPlant().db.string(), "--script",
        (dir / "click.script").string()},
       {"DISPLAY=" + screen.display()}, dir / "view.log");
   std::optional<test::ScreenImage> before, after;
