@@ -24,14 +24,19 @@ std::vector<uint32_t> layerObjects() {
   return layer;
 }
 
+// Hides the layer, or shows it again.
+void toggle(ObjectStates& states, const std::vector<uint32_t>& layer, bool& hidden) {
+  hidden = !hidden;
+  for (uint32_t o : layer) states.set(o, kObjectHidden, hidden);
+}
+
 // Hide (and show again) one layer, then the first cut query that recounts.
 void BM_ToggleLayerOnTheCpu(benchmark::State& state) {
   ObjectStates states(kObjects);
   const std::vector<uint32_t> layer = layerObjects();
   bool hidden = false;
   for (auto _ : state) {
-    hidden = !hidden;
-    for (uint32_t o : layer) states.set(o, kObjectHidden, hidden);
+    toggle(states, layer, hidden);
     benchmark::DoNotOptimize(states.allHidden(0, 7));
   }
   state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(layer.size()));
@@ -50,8 +55,7 @@ void BM_UploadAllStates(benchmark::State& state) {
   const std::vector<uint32_t> layer = layerObjects();
   bool hidden = false;
   for (auto _ : state) {
-    hidden = !hidden;
-    for (uint32_t o : layer) states.set(o, kObjectHidden, hidden);
+    toggle(states, layer, hidden);
     renderer.setObjectStates(states.gpuStates());
     glFinish();
   }

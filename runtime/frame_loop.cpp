@@ -232,6 +232,17 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   return stats;
 }
 
+FrameStats Walkthrough::renderSettled(const Camera& camera, bool* settled, int max_frames) {
+  FrameStats stats;
+  int steady = 0;
+  for (int i = 0; i < max_frames && steady < 3; ++i) {
+    stats = renderFrame(camera, 0.0);
+    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
+  }
+  if (settled) *settled = steady == 3;
+  return stats;
+}
+
 void Walkthrough::uploadObjectStates() {
   if (!object_states_.changed()) return;
   renderer_->setObjectStates(object_states_.gpuStates());

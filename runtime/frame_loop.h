@@ -75,6 +75,11 @@ class Walkthrough {
   // drives the velocity estimate for prefetching.
   FrameStats renderFrame(const Camera& camera, double time_s);
 
+  // Renders frames from `camera` until the cut holds what the view asks for (three frames in a
+  // row with no page missing and no ancestor drawn instead), at most max_frames. Returns the last
+  // frame's statistics; `settled` says whether it got there. For picks and still pictures.
+  FrameStats renderSettled(const Camera& camera, bool* settled = nullptr, int max_frames = 200);
+
   // Draws the last frame's whole cut again into the same targets with the same camera and no
   // occlusion culling, in the order the frame drew (hzb: last frame's visible clusters first,
   // then the rest in cut order), so depth ties resolve alike and the id buffer then differs from

@@ -13,6 +13,8 @@
 
 #include <glm/glm.hpp>
 
+#include "object_states.h"
+
 namespace tw::gl {
 
 // Shader storage binding points.
@@ -85,14 +87,18 @@ layout(location = 0) uniform mat4 view_projection;
 // outputs an object id (objectHidden), so they neither show nor write depth; selected ones are
 // tinted and recoloured ones take their override, through objectBaseColor.
 inline std::string objectColorGlsl() {
+  static_assert(kObjectColorBinding == 2, "the GLSL below binds the colours at 2");
   return R"(
 layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
 struct ObjectState { uint flags; uint color_rgba; };
-layout(std430, binding = 5) readonly buffer ObjectStates { ObjectState object_states[]; };
+layout(std430, binding = )" + std::to_string(kObjectStateBinding) +
+         R"() readonly buffer ObjectStates { ObjectState object_states[]; };
 layout(location = 1) uniform uint object_color_count;
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
 const vec4 kSelectedTint = vec4(1.0, 0.55, 0.05, 1.0);
-const uint kObjectHidden = 1u, kObjectSelected = 2u, kObjectRecolored = 8u;
+const uint kObjectHidden = )" + std::to_string(tw::kObjectHidden) +
+         "u, kObjectSelected = " + std::to_string(tw::kObjectSelected) +
+         "u, kObjectRecolored = " + std::to_string(tw::kObjectRecolored) + R"(u;
 uint objectFlags(uint object) {
   return object < object_color_count ? object_states[object].flags : 0u;
 }

@@ -1,5 +1,5 @@
 // Per-object state at run time, kept by global object index (the package's object table):
-// hidden, selected, X-ray and a colour override, for the design-review tools (layers, search,
+// hidden, selected and a colour override, for the design-review tools (layers, search,
 // picking). The GPU reads it from one buffer indexed by object (GlRenderer::setObjectStates), in
 // every pass that colours or outputs an object id, so it holds at every level of detail and
 // survives the eviction and reload of pages: nothing of it lives in the pages.
@@ -20,7 +20,6 @@ namespace tw {
 // Bits of GpuObjectState::flags; the shaders use the same values (gl_shaders.h).
 inline constexpr uint32_t kObjectHidden = 1u;     // drawn nowhere, occludes nothing
 inline constexpr uint32_t kObjectSelected = 2u;   // tinted
-inline constexpr uint32_t kObjectXray = 4u;       // reserved: drawn ghosted (not drawn yet)
 inline constexpr uint32_t kObjectRecolored = 8u;  // color_rgba replaces the object's colour
 
 // std430 layout of the GLSL struct (8 bytes, array stride 8).

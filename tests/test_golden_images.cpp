@@ -79,12 +79,9 @@ Frame renderSettled(const fs::path& package,
   options.prefetch = false;
   Walkthrough walk(package, options);
   const Camera camera = aim(walk);
-  int steady = 0;
-  for (int i = 0; i < 200 && steady < 3; ++i) {
-    const FrameStats stats = walk.renderFrame(camera, 0.0);
-    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
-  }
-  EXPECT_EQ(steady, 3) << "the cut did not settle";
+  bool settled = false;
+  walk.renderSettled(camera, &settled);
+  EXPECT_TRUE(settled) << "the cut did not settle";
   Frame frame;
   walk.renderer().readColor(frame.rgba);
   walk.renderer().readObjectIds(frame.ids);

@@ -20,16 +20,6 @@ namespace {
 
 constexpr int kWidth = 320, kHeight = 180;
 
-FrameStats renderSettled(Walkthrough& walk, const Camera& camera) {
-  FrameStats stats;
-  int steady = 0;
-  for (int i = 0; i < 200 && steady < 3; ++i) {
-    stats = walk.renderFrame(camera, 0.0);
-    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
-  }
-  return stats;
-}
-
 struct View {
   const char* name;
   glm::dvec3 eye, target;
@@ -64,7 +54,9 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
     camera.position = v.eye;
     camera.lookAt(v.target);
     camera.far_m = 10.0 * diagonal + glm::length(v.eye - centre);
-    const FrameStats stats = renderSettled(walk, camera);
+    bool settled = false;
+    const FrameStats stats = walk.renderSettled(camera, &settled);
+    EXPECT_TRUE(settled);
     if (std::string(v.name) == "far") {
       EXPECT_LT(stats.triangles_drawn * 4, level0);
     }

@@ -38,15 +38,6 @@ void parsePixel(const std::string& text, int& x, int& y) {
                              text + "'");
 }
 
-// Frames until the cut holds what the view asks for; the pick then reads the final frame.
-void renderSettled(Walkthrough& walk, const Camera& camera) {
-  int steady = 0;
-  for (int i = 0; i < 200 && steady < 3; ++i) {
-    const FrameStats stats = walk.renderFrame(camera, 0.0);
-    steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
-  }
-}
-
 nlohmann::json recordJson(const ProjectRecord& r) {
   return {{"db_key", r.db_key},
           {"type", r.type},
@@ -126,7 +117,7 @@ void runPick(const PickArgs& args) {
   Walkthrough walk(args.file, options);
   const double diagonal = glm::length(walk.worldMax() - walk.worldMin());
   camera.far_m = std::max(100.0, 10.0 * diagonal + glm::length(camera.position - walk.worldMin()));
-  renderSettled(walk, camera);
+  walk.renderSettled(camera);  // the pick reads the settled frame
   const std::optional<Pick> pick = pickPixel(walk.renderer(), camera, x, y);
   if (!pick) {
     if (args.json) std::printf("%s\n", nlohmann::json{{"object", nullptr}}.dump(1).c_str());
