@@ -24,6 +24,9 @@
 //   1.5 (2026-11) box faces covered by another box's face (covered_box_faces.h): instance flags
 //       kInstanceCoveredFaces, and header flag kHeaderCoveredFacesMarked saying the search ran.
 //       Earlier packages stay valid (nothing is marked); a 1.4 view rejects marked ones.
+//   1.6 (2026-12) the project database's path (PackageHeader::database_path_*, in the string
+//       pool; relative to the package's folder unless absolute), taken from two reserved fields.
+//       Earlier packages stay valid (no path); a 1.5 view rejects a package that names one.
 #pragma once
 
 #include <bit>
@@ -38,7 +41,7 @@ static_assert(std::endian::native == std::endian::little,
 // Bumped for incompatible changes; a view rejects any other version.
 inline constexpr uint32_t kVersion = 1;
 // Bumped for compatible additions (new sections appended to the table); informational.
-inline constexpr uint32_t kMinorVersion = 5;
+inline constexpr uint32_t kMinorVersion = 6;
 
 inline constexpr char kMagic[8] = {'T', 'W', 'P', 'A', 'C', 'K', 'G', '\0'};
 
@@ -116,7 +119,12 @@ struct PackageHeader {
   uint32_t max_cluster_triangles;  // largest triangle_count of any cluster
   uint32_t reserved1;              // 0
   uint64_t total_triangles;        // sum over level-0 mesh clusters (the input triangle count)
-  uint64_t reserved2[11];          // 0
+  // The project database (SQLite) the package's object keys refer to, in the string pool;
+  // 0 bytes: none named. Relative to the package's folder unless absolute.
+  uint64_t database_path_offset;
+  uint32_t database_path_bytes;    // <= kMaxStringBytes
+  uint32_t reserved3;              // 0
+  uint64_t reserved2[9];           // 0
   uint64_t header_checksum;        // XXH3-64 of header (this field as 0) + section table
 };
 static_assert(sizeof(PackageHeader) == 256);

@@ -20,6 +20,7 @@ PackageSummary summarizePackage(const PackageView& view) {
   s.file_bytes = view.fileBytes();
   s.version = h.version;
   s.minor_version = h.minor_version;
+  s.database_path = std::string(view.databasePath());
   s.origin = view.origin();
   s.position_step_m = h.position_step_m;
   s.bounds_min = glm::vec3(h.bounds_min[0], h.bounds_min[1], h.bounds_min[2]);

@@ -59,6 +59,7 @@ struct PackageSummary {
   uint64_t covered_box_faces = 0;
   uint64_t objects = 0, objects_with_db_key = 0;
   uint64_t closed_objects = 0;  // kObjectClosedSurface: back faces may be culled
+  std::string database_path;    // as stored (relative to the package's folder); empty: none
   struct Layer {
     std::string name;
     uint32_t color_rgba = 0;

@@ -207,7 +207,7 @@ void PackageView::validateHeader() {
     fail(at(&h.header_checksum), "header checksum mismatch (header or section table is corrupt)");
 
   // Header values.
-  if (h.reserved0 != 0 || h.reserved1 != 0)
+  if (h.reserved0 != 0 || h.reserved1 != 0 || h.reserved3 != 0)
     fail(at(&h.reserved0), "reserved header fields are not zero");
   for (uint64_t r : h.reserved2)
     if (r != 0) fail(at(&h.reserved2), "reserved header fields are not zero");
@@ -337,6 +337,8 @@ void PackageView::validateNamedRecords() const {
       fail(offsetOf(record), std::string(what) + " [" + str(offset) + ", +" + str(bytes) +
                                  ") is not inside the string pool");
   };
+  checkString(&header_->database_path_offset, header_->database_path_offset,
+              header_->database_path_bytes, "database path");
   for (const LayerRecord& l : layers_) checkString(&l, l.name_offset, l.name_bytes, "layer name");
   for (const ObjectRecord& o : objects_) {
     if (o.layer >= layers_.size())
@@ -550,6 +552,10 @@ std::string_view PackageView::objectName(uint32_t object) const {
 std::string_view PackageView::objectDbKey(uint32_t object) const {
   const ObjectRecord& o = objects_[object];
   return strings_.substr(o.db_key_offset, o.db_key_bytes);
+}
+
+std::string_view PackageView::databasePath() const {
+  return strings_.substr(header_->database_path_offset, header_->database_path_bytes);
 }
 
 std::string_view PackageView::layerName(uint32_t layer) const {

@@ -78,6 +78,9 @@ class PackageView {
   // Strings of validated records (offsets were checked at open).
   std::string_view objectName(uint32_t object) const;
   std::string_view objectDbKey(uint32_t object) const;
+  // The project database the preprocessor was told of, as stored (relative to the package's
+  // folder unless absolute); empty when none.
+  std::string_view databasePath() const;
   std::string_view layerName(uint32_t layer) const;
 
   // The stored (possibly compressed) bytes of a page, straight from the mapping.

@@ -195,6 +195,11 @@ uint64_t PackageStorage::addString(std::string_view text) {
   return offset;
 }
 
+void PackageStorage::setDatabasePath(std::string_view path) {
+  database_path_bytes = checkedStringBytes(path, "database path");
+  database_path_offset = addString(path);
+}
+
 uint32_t PackageStorage::addLayer(const Layer& layer) {
   LayerRecord r{};
   r.name_bytes = checkedStringBytes(layer.name, "layer name");
@@ -622,6 +627,8 @@ PackageWriteStats writePackage(const PackageStorage& storage, const std::filesys
   h.section_entry_bytes = sizeof(SectionEntry);
   h.section_count = kSectionCount;
   h.input_hash = storage.input_hash;
+  h.database_path_offset = storage.database_path_offset;
+  h.database_path_bytes = storage.database_path_bytes;
   h.cluster_record_bytes = sizeof(ClusterRecord);
   h.group_record_bytes = sizeof(GroupRecord);
   h.page_record_bytes = sizeof(PageRecord);

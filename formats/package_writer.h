@@ -67,6 +67,9 @@ struct PackageStorage {
   bool sealed_runs_marked = false;
   // Likewise the covered box faces (kInstanceCoveredFaces): kHeaderCoveredFacesMarked.
   bool covered_faces_marked = false;
+  // The project database's path as the header names it (addString'd by setDatabasePath).
+  uint64_t database_path_offset = 0;
+  uint32_t database_path_bytes = 0;
 
   std::vector<pkg::ClusterRecord> clusters;
   std::vector<pkg::GroupRecord> groups;
@@ -80,6 +83,9 @@ struct PackageStorage {
 
   // Appends bytes to the string pool (no deduplication); returns their offset.
   uint64_t addString(std::string_view text);
+  // Names the project database (a path relative to the package's folder, or absolute) in the
+  // header; throws std::invalid_argument when it is longer than a string may be.
+  void setDatabasePath(std::string_view path);
   // Appends a layer / object record with its strings; returns its index. `aabb_*` are the
   // object's level-0 bounds relative to origin.
   uint32_t addLayer(const Layer& layer);

@@ -7,6 +7,7 @@
 
 #include "format_error.h"
 #include "gltf_reader.h"
+#include "layer_filter_sink.h"
 #include "obj_reader.h"
 #include "ply_reader.h"
 #include "stl_reader.h"
@@ -39,6 +40,12 @@ std::string_view sceneFormatName(SceneFormat format) {
 }
 
 void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
+  if (!options.exclude_layers.empty()) {
+    LayerFilterSink filter(sink, options.exclude_layers);
+    ReadOptions unfiltered = options;
+    unfiltered.exclude_layers.clear();
+    return readScene(path, filter, unfiltered);
+  }
   switch (sceneFormatOf(path)) {
     case SceneFormat::Tws: return readTws(path, sink, options);
     case SceneFormat::Ply: return readPly(path, sink, options);

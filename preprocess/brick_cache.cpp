@@ -66,6 +66,8 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   addValue(effectiveMaxBrickTriangles(options));
   addValue(options.nurbs_tolerance);
   addValue(options.position_step_m);
+  // Only when set, so that a run without exclusions keeps the hash it always had.
+  for (const std::string& name : options.exclude_layers) addString("exclude-layer:" + name);
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

@@ -194,6 +194,7 @@ class PreprocessRun {
   BrickCache openCache();
   void packObjects();
   void snapToFixpoint();
+  std::string databasePathFrom(const std::filesystem::path& package) const;
   void packMeshClusters();
   void packParametricClusters();
   SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All}; }
@@ -242,6 +243,7 @@ BrickCache PreprocessRun::openCache() {
   bricking_.max_brick_triangles = options_.max_brick_triangles;
   bricking_.position_step_m = pkg::kDefaultPositionStepM;
   bricking_.progress = progress_;
+  bricking_.exclude_layers = options_.exclude_layers;
   dag_options_.cluster_size = options_.cluster_size;
 
   RunHash hash;
@@ -265,7 +267,8 @@ void PreprocessRun::brickInputs() {
   }
   if (!report_.bricking_reused) {
     clock_.start("survey");
-    SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_);
+    SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
+                                     bricking_.exclude_layers);
     throwIfCancelled(progress_);
     clock_.start("brick");
     scene_ = brickScene(options_.inputs, survey, bricking_);
@@ -403,10 +406,22 @@ void PreprocessRun::pack() {
   // Each table keeps about budget / 1024 in memory (2 MiB at the default 2G).
   storage_.spillTablesTo(bricking_.work_dir / "tables",
                          std::clamp<uint64_t>(options_.memory_budget_bytes / 1024, 1024, 4u << 20));
+  if (!options_.database.empty()) storage_.setDatabasePath(databasePathFrom(options_.output));
   packObjects();
   packMeshClusters();
   packParametricClusters();
   endStage(progress_);
+}
+
+// The database as the package names it: relative to the package's folder when it can be, so
+// a folder holding both can be moved or copied whole.
+std::string PreprocessRun::databasePathFrom(const std::filesystem::path& package) const {
+  const std::filesystem::path db = std::filesystem::absolute(options_.database).lexically_normal();
+  const std::filesystem::path folder =
+      std::filesystem::absolute(package).lexically_normal().parent_path();
+  if (db.root_name() != folder.root_name()) return db.string();
+  const std::filesystem::path relative = db.lexically_relative(folder);
+  return relative.empty() ? db.string() : relative.string();
 }
 
 // Snapping pass 1 to its fixpoint: a piece whose shared vertices another piece coarsened is

@@ -26,6 +26,11 @@ namespace tw {
 struct PreprocessOptions {
   std::vector<std::filesystem::path> inputs;
   std::filesystem::path output;
+  // Objects of the layers of these names are left out of the package (the layer table keeps
+  // them, empty).
+  std::vector<std::string> exclude_layers;
+  // The project database the objects' keys refer to, named in the package (empty: none).
+  std::filesystem::path database;
   uint64_t memory_budget_bytes = 2ull << 30;
   uint32_t threads = 0;          // 0: all cores
   uint32_t cluster_size = 256;   // triangles per cluster

@@ -600,7 +600,7 @@ uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
 }
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,
-                        Progress* progress) {
+                        Progress* progress, const std::vector<std::string>& exclude_layers) {
   SceneSurvey survey;
   for (const auto& input : inputs) survey.input_bytes += fileBytes(input);
   beginStage(progress, "survey", survey.input_bytes);
@@ -614,6 +614,7 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float 
     OffsetProgress sub(progress, base);
     ReadOptions read_options;
     read_options.progress = &sub;
+    read_options.exclude_layers = exclude_layers;
     readScene(input, fan, read_options);
     checkCancelled(progress);
     survey.bounds.add(stats.bounds);
@@ -679,6 +680,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     OffsetProgress sub(options.progress, base);
     ReadOptions read_options;
     read_options.progress = &sub;
+    read_options.exclude_layers = options.exclude_layers;
     readScene(inputs[i], sink, read_options);
     checkCancelled(options.progress);
     base += fileBytes(inputs[i]);

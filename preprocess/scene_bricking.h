@@ -53,6 +53,7 @@ struct BrickingOptions {
   // brick seams see them as one vertex, as the package will store them (grid_weld.h).
   double position_step_m = 0.0;
   Progress* progress = nullptr;
+  std::vector<std::string> exclude_layers;  // objects of these layers are left out (by name)
 };
 
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
@@ -74,7 +75,8 @@ struct SceneSurvey {
 // std::runtime_error("cancelled") when `progress` asks to stop.
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
-                        Progress* progress = nullptr);
+                        Progress* progress = nullptr,
+                        const std::vector<std::string>& exclude_layers = {});
 
 // One non-empty brick. Brick files live in BrickedScene::work_dir.
 struct BrickInfo {

@@ -177,6 +177,7 @@ uint64_t Walkthrough::redrawUnculled() {
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).first(first));
   drawParametrics(last_parametric_, nullptr);
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(first));
+  drawGhostLists(last_eye_, nullptr);
   const RenderStats render_stats = renderer_->endFrame();
   glFinish();
   return render_stats.triangles;
@@ -215,9 +216,11 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
   for (uint32_t c : cut_list) pager_->touch(view_->clusters()[c].page);
   uploadObjectStates();
-  const std::vector<uint32_t>& draw_list = withoutHidden(cut_list, shown_clusters_);
-  const std::vector<uint32_t>& parametric_list = withoutHidden(
-      options_.reference ? all_parametric_ : cut_result_.parametric_clusters, shown_parametric_);
+  const std::vector<uint32_t>& parametric_cut =
+      options_.reference ? all_parametric_ : cut_result_.parametric_clusters;
+  const std::vector<uint32_t>& draw_list = withOpaqueObjects(cut_list, shown_clusters_);
+  const std::vector<uint32_t>& parametric_list =
+      withOpaqueObjects(parametric_cut, shown_parametric_);
   rememberView(camera, eye, aspect, time_s, parametric_list);
 
   renderer_->beginFrame(last_rotation_, last_projection_);
@@ -228,6 +231,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     drawWithHzb(eye, draw_list, parametric_list, stats);
   else
     drawWithoutHzb(mode, eye, draw_list, stats);
+  drawGhostsAndOutlines(eye, cut_list, parametric_cut, stats);
   finishFrame(frame_start, stats);
   return stats;
 }
@@ -249,14 +253,49 @@ void Walkthrough::uploadObjectStates() {
   object_states_.markUploaded();
 }
 
-const std::vector<uint32_t>& Walkthrough::withoutHidden(const std::vector<uint32_t>& clusters,
-                                                        std::vector<uint32_t>& kept) const {
-  if (object_states_.noneHidden()) return clusters;
+const std::vector<uint32_t>& Walkthrough::withOpaqueObjects(
+    const std::vector<uint32_t>& clusters, std::vector<uint32_t>& kept) const {
+  if (object_states_.everyObjectOpaque()) return clusters;
   kept.clear();
   const auto records = view_->clusters();
   for (uint32_t c : clusters)
-    if (!object_states_.allHidden(records[c].object_min, records[c].object_max)) kept.push_back(c);
+    if (object_states_.anyOpaque(records[c].object_min, records[c].object_max)) kept.push_back(c);
   return kept;
+}
+
+void Walkthrough::drawGhostsAndOutlines(const glm::dvec3& eye, std::span<const uint32_t> mesh,
+                                        std::span<const uint32_t> parametric, FrameStats& stats) {
+  ghost_mesh_.clear();
+  ghost_parametric_.clear();
+  if (object_states_.anyGhosted()) {
+    const auto records = view_->clusters();
+    auto ghosted = [&](uint32_t c) {
+      return object_states_.anyGhosted(records[c].object_min, records[c].object_max);
+    };
+    std::copy_if(mesh.begin(), mesh.end(), std::back_inserter(ghost_mesh_), ghosted);
+    if (options_.parametrics != ParametricMode::Off)
+      std::copy_if(parametric.begin(), parametric.end(), std::back_inserter(ghost_parametric_),
+                   ghosted);
+  }
+  drawGhostLists(eye, &stats);
+}
+
+// Ghosts are drawn whole, with no occlusion test: they are few next to the opaque rest when a
+// reviewer X-rays a part, and when most of the model is ghosted there is little left to occlude.
+void Walkthrough::drawGhostLists(const glm::dvec3& eye, FrameStats* stats) {
+  if (!ghost_mesh_.empty() || !ghost_parametric_.empty()) {
+    ghost_items_.clear();
+    appendItems(ghost_mesh_, eye, ghost_items_);
+    renderer_->setSurfacePass(SurfacePass::Xray);
+    renderer_->draw(*pool_, ghost_items_);
+    last_parametric_view_.surface = SurfacePass::Xray;
+    drawParametrics(ghost_parametric_, stats);
+    last_parametric_view_.surface = SurfacePass::Opaque;
+    renderer_->setSurfacePass(SurfacePass::Opaque);
+    if (stats)
+      for (const DrawItem& item : ghost_items_) stats->xray_triangles += item.placement.triangle_count;
+  }
+  if (object_states_.anySelected()) renderer_->drawSelectionOutlines();
 }
 
 // The LOD cut from the camera, its missing pages requested; with prefetching, also the cut from

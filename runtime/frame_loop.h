@@ -102,8 +102,10 @@ class Walkthrough {
   ParametricMode parametrics() const { return options_.parametrics; }
   void setParametrics(ParametricMode mode) { options_.parametrics = resolveParametricMode(mode); }
   ParametricRenderer& parametricRenderer() { return *parametric_; }
-  // Per-object state by object index (hidden, selected, colour override): changes reach the GPU
-  // in one upload at the next frame, and clusters whose objects are all hidden are not drawn.
+  // Per-object state by object index (hidden, selected, X-ray, colour override): changes reach
+  // the GPU in one upload at the next frame. A cluster goes to the opaque passes only when one of
+  // its objects is drawn opaque, and to the X-ray pass (after the opaque frame, not culled by
+  // occlusion) only when one is ghosted; selected objects are outlined.
   ObjectStates& objectStates() { return object_states_; }
   const ObjectStates& objectStates() const { return object_states_; }
   // World bounds of the model (double), for cameras and paths.
@@ -121,12 +123,17 @@ class Walkthrough {
                    std::span<const uint32_t> parametric_list, FrameStats& stats);
   void drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
                       const std::vector<uint32_t>& draw_list, FrameStats& stats);
+  // The X-ray pass over the cut's clusters with a ghosted object (kept for redrawUnculled), then
+  // the selection outline.
+  void drawGhostsAndOutlines(const glm::dvec3& eye, std::span<const uint32_t> mesh,
+                             std::span<const uint32_t> parametric, FrameStats& stats);
+  void drawGhostLists(const glm::dvec3& eye, FrameStats* stats);
   void finishFrame(std::chrono::steady_clock::time_point frame_start, FrameStats& stats);
-  // The object states uploaded if they changed; `clusters` without the ones whose objects are all
-  // hidden (in `kept`, returned), or `clusters` itself when nothing is hidden.
+  // The object states uploaded if they changed; `clusters` without the ones that have no object
+  // drawn opaque (in `kept`, returned), or `clusters` itself when every object is opaque.
   void uploadObjectStates();
-  const std::vector<uint32_t>& withoutHidden(const std::vector<uint32_t>& clusters,
-                                             std::vector<uint32_t>& kept) const;
+  const std::vector<uint32_t>& withOpaqueObjects(const std::vector<uint32_t>& clusters,
+                                                 std::vector<uint32_t>& kept) const;
   // Appends one draw item per cluster (resident, from the cut) seen from `eye`.
   void appendItems(std::span<const uint32_t> clusters, const glm::dvec3& eye,
                    std::vector<DrawItem>& items) const;
@@ -154,7 +161,9 @@ class Walkthrough {
   std::vector<uint32_t> hzb_cut_, mesh_pass_, parametric_pass_;
   ParametricView last_parametric_view_;
   ObjectStates object_states_;
-  std::vector<uint32_t> shown_clusters_, shown_parametric_;  // the cut without hidden clusters
+  std::vector<uint32_t> shown_clusters_, shown_parametric_;  // the cut's clusters drawn opaque
+  std::vector<uint32_t> ghost_mesh_, ghost_parametric_;     // and those drawn ghosted
+  std::vector<DrawItem> ghost_items_;
   size_t full_order_pass1_ = 0;  // hzb: parametrics were drawn after this many of full_order_
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
   std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn

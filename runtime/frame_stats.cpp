@@ -31,6 +31,7 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("nodes_drawn", s.nodes_drawn);
   visit("triangles_drawn", s.triangles_drawn);
   visit("two_sided_triangles", s.two_sided_triangles);
+  visit("xray_triangles", s.xray_triangles);
   visit("culled_frustum", s.culled_frustum);
   visit("culled_small", s.culled_small);
   visit("parametric_skipped", s.parametric_skipped);

@@ -21,6 +21,7 @@ struct FrameStats {
   uint32_t nodes_drawn = 0;    // mesh clusters drawn
   uint64_t triangles_drawn = 0;
   uint64_t two_sided_triangles = 0;  // of triangles_drawn: without back-face culling
+  uint64_t xray_triangles = 0;  // mesh triangles drawn again ghosted (X-ray pass)
   uint32_t culled_frustum = 0;
   uint32_t culled_small = 0;
   // Parametric clusters of the cut (parametric_renderer.h): drawn, or not drawn (mode off).

@@ -46,6 +46,10 @@ struct GlRenderer::Impl {
   GLuint program = 0;               // objects flat from the vertices (vertex_object_tags.h)
   GLuint per_triangle_program = 0;  // clusters with GpuCluster::object_per_triangle
   GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
+  GLuint outline_program = 0;  // selection outline over the finished frame
+  GLuint empty_vertex_array = 0;  // for the outline's screen triangle (no attributes)
+  GLuint pass_buffer = 0;  // uniform buffer: the SurfacePass being drawn
+  SurfacePass surface_pass = SurfacePass::Opaque;
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
   GLuint state_buffer = 0;  // GpuObjectState per object, as many as colours
   uint32_t object_color_count = 0;
@@ -165,6 +169,9 @@ struct GlRenderer::Impl {
     glDeleteBuffers(1, &draw_data_buffer);
     glDeleteBuffers(1, &color_buffer);
     glDeleteBuffers(1, &state_buffer);
+    glDeleteBuffers(1, &pass_buffer);
+    glDeleteVertexArrays(1, &empty_vertex_array);
+    glDeleteProgram(outline_program);
     glDeleteProgram(program);
     glDeleteProgram(per_triangle_program);
     glDeleteProgram(depth_program);
@@ -191,6 +198,12 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
                                         "mesh, objects per triangle");
   s.depth_program =
       buildProgram(gl::occluderVertexShader(), gl::occluderFragmentShader(), "occluder");
+  s.outline_program =
+      buildProgram(gl::outlineVertexShader(), gl::outlineFragmentShader(), "selection outline");
+  glCreateVertexArrays(1, &s.empty_vertex_array);
+  glCreateBuffers(1, &s.pass_buffer);
+  const uint32_t opaque_pass[4] = {uint32_t(SurfacePass::Opaque), 0, 0, 0};  // std140: 16 bytes
+  glNamedBufferData(s.pass_buffer, sizeof opaque_pass, opaque_pass, GL_DYNAMIC_DRAW);
   glCreateBuffers(1, &s.indirect_buffer);
   glCreateBuffers(1, &s.draw_data_buffer);
   glCreateBuffers(1, &s.color_buffer);
@@ -200,7 +213,7 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
   glCreateBuffers(1, &s.state_buffer);
   const GpuObjectState no_state;
   glNamedBufferData(s.state_buffer, sizeof no_state, &no_state, GL_DYNAMIC_DRAW);
-  for (GLuint program : {s.program, s.per_triangle_program})
+  for (GLuint program : {s.program, s.per_triangle_program, s.outline_program})
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, 0u);
   glCreateQueries(GL_TIME_ELAPSED, kQueryRing, s.queries);
   if (GLenum error = glGetError(); error != GL_NO_ERROR) {
@@ -242,7 +255,7 @@ void GlRenderer::setObjectColors(std::span<const uint32_t> rgba) {
     glNamedBufferData(s.state_buffer, static_cast<GLsizeiptr>(none.size() * sizeof(GpuObjectState)),
                       none.data(), GL_DYNAMIC_DRAW);
   }
-  for (GLuint program : {s.program, s.per_triangle_program})
+  for (GLuint program : {s.program, s.per_triangle_program, s.outline_program})
     glProgramUniform1ui(program, gl::kObjectColorCountLocation, s.object_color_count);
 }
 
@@ -252,6 +265,75 @@ void GlRenderer::setObjectStates(std::span<const GpuObjectState> states) {
   if (n > 0)
     glNamedBufferSubData(s.state_buffer, 0, static_cast<GLsizeiptr>(n * sizeof(GpuObjectState)),
                          states.data());
+}
+
+void GlRenderer::setSurfacePass(SurfacePass pass) {
+  Impl& s = *impl_;
+  if (pass == s.surface_pass) return;
+  s.surface_pass = pass;
+  const uint32_t value = uint32_t(pass);
+  glNamedBufferSubData(s.pass_buffer, 0, sizeof value, &value);
+  if (pass == SurfacePass::Opaque) {
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+  }
+}
+
+SurfacePass GlRenderer::surfacePass() const { return impl_->surface_pass; }
+
+void GlRenderer::bindSurfaceState() const { bindSurfaceState(impl_->fbo); }
+
+void GlRenderer::bindSurfaceState(unsigned framebuffer) const {
+  const Impl& s = *impl_;
+  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+  glViewport(0, 0, s.options.width, s.options.height);
+  glDisable(GL_SCISSOR_TEST);
+  glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);  // reversed Z (camera.h)
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_GREATER);
+  if (s.surface_pass == SurfacePass::Opaque) {
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_BLEND);
+  } else {
+    // Ghosts: over the opaque frame, behind what is in front of them, leaving depth and ids to
+    // the opaque objects (what is seen through a ghost is what a click picks).
+    glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+    glDepthMask(GL_FALSE);
+    glEnablei(GL_BLEND, 0);
+    glBlendColor(0.0f, 0.0f, 0.0f, kXrayAlpha);
+    glBlendFunc(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA);
+  }
+  glBindBufferBase(GL_UNIFORM_BUFFER, gl::kSurfacePassBinding, s.pass_buffer);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, s.color_buffer);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, s.state_buffer);
+}
+
+void GlRenderer::drawSelectionOutlines() {
+  const Impl& s = *impl_;
+  glBindFramebuffer(GL_FRAMEBUFFER, s.fbo);
+  glViewport(0, 0, s.options.width, s.options.height);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_DEPTH_TEST);
+  glDisable(GL_BLEND);
+  glDisable(GL_CULL_FACE);
+  // The ids are read, so they must not be written: colour only.
+  glColorMaski(0, GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glColorMaski(1, GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+  glDepthMask(GL_FALSE);
+  glUseProgram(s.outline_program);
+  glBindTextureUnit(0, s.ids);
+  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, s.state_buffer);
+  glBindVertexArray(s.empty_vertex_array);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glBindVertexArray(0);
+  glBindTextureUnit(0, 0);
+  glUseProgram(0);
+  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+  glDepthMask(GL_TRUE);
+  glEnable(GL_DEPTH_TEST);
 }
 
 void GlRenderer::beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection) {
@@ -352,10 +434,7 @@ void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> i
   s.frame.triangles += triangles;
   if (!cull_back) s.frame.two_sided_triangles += triangles;
 
-  s.bindTargetState();
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_GREATER);
-  glDisable(GL_BLEND);
+  bindSurfaceState();
   if (cull_back) {
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
@@ -368,8 +447,6 @@ void GlRenderer::drawBatch(const GeometryPool& pool, std::span<const DrawItem> i
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kDrawDataBinding, s.draw_data_buffer);
   glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kTriangleObjectBinding,
                    pool.triangleObjectBuffer());
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, s.color_buffer);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, s.state_buffer);
   glBindBuffer(GL_DRAW_INDIRECT_BUFFER, s.indirect_buffer);
   glMultiDrawElementsIndirect(GL_TRIANGLES, GL_UNSIGNED_SHORT, nullptr,
                               static_cast<GLsizei>(s.commands.size()), 0);

@@ -83,6 +83,23 @@ class GlRenderer {
   // entries past them are ignored. setObjectColors resets every state to none.
   void setObjectStates(std::span<const GpuObjectState> states);
 
+  // The surface pass the following draws belong to (object_states.h). In SurfacePass::Xray,
+  // draw() and other surface passes (bindSurfaceState) blend the ghost colour over the frame at
+  // kXrayAlpha, test depth against it without writing depth, and write no ids. Setting Opaque
+  // again restores the opaque state (colour, ids and depth written, no blending).
+  void setSurfacePass(SurfacePass pass);
+  SurfacePass surfacePass() const;
+  static constexpr float kXrayAlpha = 0.22f;
+  // The GL state of a surface draw of the current pass into `framebuffer` (the renderer's own
+  // targets, or one of the same size and attachments): target, viewport, reversed-Z clip
+  // control, depth test, masks and blending, and the pass, object colour and object state
+  // buffers bound. Every program that includes gl_shaders.h's objectColorGlsl draws under it.
+  void bindSurfaceState() const;
+  void bindSurfaceState(unsigned framebuffer) const;
+  // Outlines the selected objects (object_states.h) on the frame's colour from its ids: call
+  // after the frame's surface passes, before endFrame.
+  void drawSelectionOutlines();
+
   // Clears colour, ids and depth, and sets the camera (rotation and projection; positions come
   // eye-relative through DrawItem::offset_eye).
   void beginFrame(const glm::mat4& view_rotation, const glm::mat4& projection);

@@ -22,6 +22,8 @@ inline constexpr unsigned kDrawDataBinding = 0;        // GpuDrawData[], indexed
 inline constexpr unsigned kTriangleObjectBinding = 1;  // uint object per pool triangle
 inline constexpr unsigned kObjectColorBinding = 2;     // uint 0xAABBGGRR per object index
 inline constexpr unsigned kObjectStateBinding = 5;     // GpuObjectState per object index
+// Uniform buffer binding points.
+inline constexpr unsigned kSurfacePassBinding = 0;  // uint: the SurfacePass being drawn
 // Uniform locations.
 inline constexpr int kViewProjectionLocation = 0;  // mat4: projection * view rotation
 inline constexpr int kObjectColorCountLocation = 1;  // uint: entries in the colour buffer
@@ -83,27 +85,42 @@ layout(location = 0) uniform mat4 view_projection;
 // two-sided (the normal is turned toward the eye, because CAD surfaces are often open).
 // The object colour part (objectColorGlsl) also serves vertex stages that hand the colour to
 // the fragments flat.
-// Per-object state (object_states.h): hidden objects are discarded by every fragment stage that
-// outputs an object id (objectHidden), so they neither show nor write depth; selected ones are
-// tinted and recoloured ones take their override, through objectBaseColor.
+// Per-object state (object_states.h): every fragment stage that outputs an object id discards
+// the fragments of objects its surface pass does not draw (objectSkipped): in the opaque pass
+// the hidden and the ghosted, in the X-ray pass all but the ghosted. Selected objects are
+// tinted, recoloured ones take their override, and in the X-ray pass every object takes the
+// ghost colour (the blending makes it translucent), through objectBaseColor. The pass is one
+// uniform buffer shared by every program (GlRenderer::bindSurfaceState binds it).
 inline std::string objectColorGlsl() {
   static_assert(kObjectColorBinding == 2, "the GLSL below binds the colours at 2");
+  static_assert(uint8_t(SurfacePass::Opaque) == 0 && uint8_t(SurfacePass::Xray) == 1);
   return R"(
 layout(std430, binding = 2) readonly buffer ObjectColors { uint object_colors[]; };
 struct ObjectState { uint flags; uint color_rgba; };
 layout(std430, binding = )" + std::to_string(kObjectStateBinding) +
          R"() readonly buffer ObjectStates { ObjectState object_states[]; };
+layout(std140, binding = )" + std::to_string(kSurfacePassBinding) +
+         R"() uniform SurfacePassBlock { uint surface_pass; };
 layout(location = 1) uniform uint object_color_count;
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
 const vec4 kSelectedTint = vec4(1.0, 0.55, 0.05, 1.0);
+const vec4 kGhost = vec4(0.34, 0.46, 0.66, 1.0);
 const uint kObjectHidden = )" + std::to_string(tw::kObjectHidden) +
          "u, kObjectSelected = " + std::to_string(tw::kObjectSelected) +
+         "u, kObjectXray = " + std::to_string(tw::kObjectXray) +
          "u, kObjectRecolored = " + std::to_string(tw::kObjectRecolored) + R"(u;
 uint objectFlags(uint object) {
   return object < object_color_count ? object_states[object].flags : 0u;
 }
-bool objectHidden(uint object) { return (objectFlags(object) & kObjectHidden) != 0u; }
+// As objectLook (object_states.h): whether the object is drawn ghosted, or not at all.
+bool objectSkipped(uint object) {
+  uint flags = objectFlags(object);
+  if ((flags & kObjectHidden) != 0u) return true;
+  bool ghosted = (flags & kObjectXray) != 0u && (flags & kObjectSelected) == 0u;
+  return ghosted != (surface_pass == 1u);
+}
 vec4 objectBaseColor(uint object) {
+  if (surface_pass == 1u) return kGhost;
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
   vec4 base = rgba == 0u ? kGrey : unpackUnorm4x8(rgba);
   uint flags = objectFlags(object);
@@ -177,10 +194,10 @@ void main() {
     base_color = objectBaseColor(object);
   }
   gl_Position = view_projection * vec4(pos_eye, 1.0);
-  // Only triangles of this vertex's object use it: when that object is hidden they all go
+  // Only triangles of this vertex's object use it: when this pass skips that object they all go
   // (their fragments would be discarded), so the vertex leaves the clip volume and a triangle
-  // of hidden corners only is rejected before any fragment.
-  if (object_plus_one != 0u && objectHidden(object_plus_one - 1u))
+  // of skipped corners only is rejected before any fragment.
+  if (object_plus_one != 0u && objectSkipped(object_plus_one - 1u))
     gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
 }
 )";
@@ -211,9 +228,53 @@ void main() {
     base = objectBaseColor(object);
   }
 #endif
-  if (id != 0u && objectHidden(id - 1u)) discard;
+  if (id != 0u && objectSkipped(id - 1u)) discard;
   out_color = shadeSurface(base, facetNormal(pos_eye), pos_eye);
   out_id = id;
+}
+)";
+}
+
+// The selection outline, drawn over the finished frame: a pixel that shows no selected object
+// but has one within two pixels takes the outline colour; it reads the frame's id target, so it
+// outlines what the id buffer holds at whatever level of detail the object was drawn. One
+// triangle covers the screen (its corners from gl_VertexID).
+inline std::string outlineVertexShader() {
+  return R"(#version 450 core
+void main() {
+  vec2 corner = vec2(float((gl_VertexID & 1) << 2), float((gl_VertexID & 2) << 1)) - 1.0;
+  gl_Position = vec4(corner, 0.0, 1.0);
+}
+)";
+}
+
+inline std::string outlineFragmentShader() {
+  return R"(#version 450 core
+layout(binding = 0) uniform usampler2D frame_ids;
+struct ObjectState { uint flags; uint color_rgba; };
+layout(std430, binding = )" + std::to_string(kObjectStateBinding) +
+         R"() readonly buffer ObjectStates { ObjectState object_states[]; };
+layout(location = 1) uniform uint object_color_count;
+layout(location = 0) out vec4 out_color;
+const uint kObjectHidden = )" + std::to_string(tw::kObjectHidden) +
+         "u, kObjectSelected = " + std::to_string(tw::kObjectSelected) + R"(u;
+const vec4 kOutline = vec4(1.0, 0.86, 0.0, 1.0);
+bool selectedAt(ivec2 p) {
+  uint id = texelFetch(frame_ids, clamp(p, ivec2(0), textureSize(frame_ids, 0) - 1), 0).r;
+  if (id == 0u || id > object_color_count) return false;
+  uint flags = object_states[id - 1u].flags;
+  return (flags & kObjectSelected) != 0u && (flags & kObjectHidden) == 0u;
+}
+void main() {
+  ivec2 p = ivec2(gl_FragCoord.xy);
+  if (selectedAt(p)) discard;
+  for (int dy = -2; dy <= 2; ++dy)
+    for (int dx = -2; dx <= 2; ++dx)
+      if (dx * dx + dy * dy <= 5 && selectedAt(p + ivec2(dx, dy))) {
+        out_color = kOutline;
+        return;
+      }
+  discard;
 }
 )";
 }

@@ -1,5 +1,5 @@
 // Per-object state at run time, kept by global object index (the package's object table):
-// hidden, selected and a colour override, for the design-review tools (layers, search,
+// hidden, selected, X-ray and a colour override, for the design-review tools (layers, search,
 // picking). The GPU reads it from one buffer indexed by object (GlRenderer::setObjectStates), in
 // every pass that colours or outputs an object id, so it holds at every level of detail and
 // survives the eviction and reload of pages: nothing of it lives in the pages.
@@ -7,8 +7,13 @@
 // Why one buffer by object and not flags in the geometry: a coarse cluster merges many objects,
 // and their triangles keep their object ids (the id buffer); a state per object then applies to
 // exactly its triangles at any level, and changing a million objects is one upload.
-// The CPU side also answers "is every object of [first, last] hidden?" in O(1) (a prefix count),
-// so the frame loop drops clusters with nothing left to show before drawing them.
+//
+// The flags decide how an object looks (ObjectLook): hidden wins over everything; a selected
+// object is drawn opaque even when X-rayed (the reviewer sees what was picked); an X-rayed one is
+// drawn ghosted in the frame's second surface pass (SurfacePass::Xray), translucent, writing no
+// depth and no id, so it neither occludes nor is picked. The CPU side answers "does any object of
+// [first, last] look so?" in O(1) (prefix counts), so the frame loop leaves a cluster out of the
+// passes that would draw nothing of it.
 #pragma once
 
 #include <cstdint>
@@ -19,8 +24,25 @@ namespace tw {
 
 // Bits of GpuObjectState::flags; the shaders use the same values (gl_shaders.h).
 inline constexpr uint32_t kObjectHidden = 1u;     // drawn nowhere, occludes nothing
-inline constexpr uint32_t kObjectSelected = 2u;   // tinted
+inline constexpr uint32_t kObjectSelected = 2u;   // tinted and outlined, opaque even if X-rayed
+inline constexpr uint32_t kObjectXray = 4u;       // ghosted: translucent, no depth, no id
 inline constexpr uint32_t kObjectRecolored = 8u;  // color_rgba replaces the object's colour
+
+enum class ObjectLook : uint8_t { Hidden, Opaque, Ghosted };
+
+// The frame's two surface passes: the opaque one (depth, ids) and the ghosted X-ray one after it.
+enum class SurfacePass : uint8_t { Opaque, Xray };
+
+inline ObjectLook objectLook(uint32_t flags) {
+  if (flags & kObjectHidden) return ObjectLook::Hidden;
+  if ((flags & kObjectXray) && !(flags & kObjectSelected)) return ObjectLook::Ghosted;
+  return ObjectLook::Opaque;
+}
+
+// Whether an object of these flags is drawn by `pass`.
+inline bool drawnIn(uint32_t flags, SurfacePass pass) {
+  return objectLook(flags) == (pass == SurfacePass::Opaque ? ObjectLook::Opaque : ObjectLook::Ghosted);
+}
 
 // std430 layout of the GLSL struct (8 bytes, array stride 8).
 struct GpuObjectState {
@@ -35,6 +57,7 @@ class ObjectStates {
 
   size_t size() const { return states_.size(); }
   uint32_t flags(uint32_t object) const { return states_[object].flags; }
+  ObjectLook look(uint32_t object) const { return objectLook(states_[object].flags); }
 
   // Sets or clears `bits` of one object, or of all. Objects past the table are ignored.
   void set(uint32_t object, uint32_t bits, bool on);
@@ -42,11 +65,14 @@ class ObjectStates {
   void setColor(uint32_t object, uint32_t rgba);  // and kObjectRecolored
   void clearColor(uint32_t object);
 
-  // Whether every object of [first, last] (inclusive, clamped to the table) is hidden, and
-  // whether any is. O(1) after a change of hidden bits has been counted (O(objects) once).
-  bool allHidden(uint32_t first, uint32_t last) const;
-  bool anyHidden(uint32_t first, uint32_t last) const;
-  bool noneHidden() const { return hiddenCount() == 0; }
+  // Counts over [first, last] (inclusive, clamped to the table), O(1) once the looks have been
+  // counted after a change (O(objects) once).
+  bool anyOpaque(uint32_t first, uint32_t last) const;   // something for the opaque pass
+  bool allOpaque(uint32_t first, uint32_t last) const;   // nothing hidden or ghosted
+  bool anyGhosted(uint32_t first, uint32_t last) const;  // something for the X-ray pass
+  bool everyObjectOpaque() const;
+  bool anyGhosted() const;
+  bool anySelected() const;  // among objects not hidden
 
   // What the GPU buffer should hold, and whether it changed since markUploaded().
   std::span<const GpuObjectState> gpuStates() const { return states_; }
@@ -54,13 +80,17 @@ class ObjectStates {
   void markUploaded() { changed_ = false; }
 
  private:
-  void countHidden() const;
-  uint32_t hiddenCount() const;
+  void countLooks() const;
+  // Of the counts below: objects in [first, last] (clamped; 0 for an empty range).
+  uint32_t countIn(const std::vector<uint32_t>& before, uint32_t first, uint32_t last,
+                   uint32_t* range_size = nullptr) const;
 
   std::vector<GpuObjectState> states_;
   bool changed_ = true;
-  // visible_before_[i]: objects below i that are not hidden; rebuilt lazily.
-  mutable std::vector<uint32_t> visible_before_;
+  // opaque_before_[i], ghosted_before_[i]: objects below i that look so; rebuilt lazily.
+  mutable std::vector<uint32_t> opaque_before_;
+  mutable std::vector<uint32_t> ghosted_before_;
+  mutable uint32_t selected_shown_ = 0;
   mutable bool counted_ = false;
 };
 

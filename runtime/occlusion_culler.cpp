@@ -267,7 +267,7 @@ void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint
       if (r.kind != uint8_t(pkg::ClusterKind::Mesh) || r.triangle_count == 0 ||
           !std::isfinite(r.error))
         continue;
-      if (frame.objects && frame.objects->anyHidden(r.object_min, r.object_max)) continue;
+      if (frame.objects && !frame.objects->allOpaque(r.object_min, r.object_max)) continue;
       if (!frame.pager->resident(r.page)) {
         frame.pager->request(r.page, kOccluderPagePriority);  // never waited for
         continue;

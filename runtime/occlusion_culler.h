@@ -126,7 +126,8 @@ struct OcclusionFrame {
   Pager* pager = nullptr;
   glm::dvec3 eye{0.0};              // package frame, metres
   glm::mat4 view_projection{1.0f};  // projection * rotation-only view, as the renderer uses
-  // Coarse occluders holding a hidden object are left out: a hidden object occludes nothing.
+  // Coarse occluders holding an object not drawn opaque are left out: hidden and ghosted
+  // objects occlude nothing.
   const ObjectStates* objects = nullptr;
 };
 

@@ -15,19 +15,20 @@
 namespace tw::test {
 
 struct GeneratedPlant {
-  std::filesystem::path package, db;
+  std::filesystem::path package, db, scene;  // the package names the database (preprocess --db)
 };
 
 inline const GeneratedPlant& generatedPlant() {
   static const GeneratedPlant plant = [] {
     const auto dir = processScratchDir("generated_plant");
-    GeneratedPlant out{dir / "plant.twk", dir / "plant.db"};
-    const auto tws = dir / "plant.tws";
+    GeneratedPlant out{dir / "plant.twk", dir / "plant.db", dir / "plant.tws"};
+    const auto& tws = out.scene;
     CommandResult gen = runTerawalk("gen plant --quiet --triangles 200K --seed 1 -o " +
                                     tws.string() + " --db " + out.db.string());
     EXPECT_EQ(gen.exit_code, 0) << gen.output;
     CommandResult pre =
-        runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string());
+        runTerawalk("preprocess --quiet " + tws.string() + " -o " + out.package.string() +
+                    " --db " + out.db.string());
     EXPECT_EQ(pre.exit_code, 0) << pre.output;
     return out;
   }();

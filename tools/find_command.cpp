@@ -14,6 +14,7 @@
 
 #include "command.h"
 #include "object_queries.h"
+#include "package_database.h"
 #include "package_view.h"
 #include "project_database.h"
 
@@ -33,14 +34,16 @@ struct FindArgs {
 void runFind(const FindArgs& args) {
   if (args.query.empty() && args.name.empty())
     throw std::runtime_error("give a QUERY over the database's records, or --name TEXT");
-  if (!args.query.empty() && args.db.empty())
-    throw std::runtime_error("a QUERY needs the project database: --db FILE");
   const PackageView view = PackageView::open(args.file);
   const auto start = std::chrono::steady_clock::now();
   std::vector<std::string> keys;
   std::vector<uint32_t> objects;
   if (!args.query.empty()) {
-    const ProjectDatabase db = ProjectDatabase::open(args.db);
+    const std::filesystem::path db_path = packageDatabasePath(args.file, view, args.db);
+    if (db_path.empty())
+      throw std::runtime_error(
+          "a QUERY needs the project database: --db FILE (the package names none)");
+    const ProjectDatabase db = ProjectDatabase::open(db_path);
     keys = db.findKeys(args.query, args.params);
     objects = objectsWithKeys(view, std::unordered_set<std::string>(keys.begin(), keys.end()));
   } else {
@@ -86,7 +89,8 @@ void registerFindCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("query", args->query,
                   "SQL condition over the records' columns, e.g. \"service = ?1 AND "
                   "nominal_diameter_mm >= ?2\"");
-  cmd->add_option("--db", args->db, "Project database (SQLite)")->check(CLI::ExistingFile);
+  cmd->add_option("--db", args->db, "Project database (SQLite); default: the one the package names")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--param", args->params, "Value bound to ?1, ?2, ... in order (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--name", args->name, "Objects whose name or database key contains this text");

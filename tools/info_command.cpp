@@ -175,6 +175,7 @@ nlohmann::json packageToJson(const PackageSummary& s) {
   j["objects"] = s.objects;
   j["objects_with_db_key"] = s.objects_with_db_key;
   j["closed_objects"] = s.closed_objects;
+  j["database"] = s.database_path;
   nlohmann::json layers = nlohmann::json::array();
   for (const auto& layer : s.layers)
     layers.push_back({{"name", layer.name}, {"objects", layer.objects},
@@ -264,6 +265,7 @@ void printPackage(const PackageSummary& s, double seconds) {
   }
   std::printf("objects     %llu (%llu with a database key, %llu closed solids)\n", ull(s.objects),
               ull(s.objects_with_db_key), ull(s.closed_objects));
+  if (!s.database_path.empty()) std::printf("database    %s\n", s.database_path.c_str());
   std::printf("layers      %zu\n", s.layers.size());
   for (const auto& layer : s.layers)
     std::printf("  %-24s %10llu objects\n", layer.name.c_str(), ull(layer.objects));

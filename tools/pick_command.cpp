@@ -15,6 +15,7 @@
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "object_pick.h"
+#include "package_database.h"
 #include "project_database.h"
 #include "snapshot_camera.h"
 
@@ -106,15 +107,13 @@ void runPick(const PickArgs& args) {
   camera.position = parseVec3(args.eye);
   camera.fov_y_rad = glm::radians(args.fov_deg);
   camera.lookAt(parseVec3(args.target));
-  std::optional<ProjectDatabase> db;
-  if (!args.db.empty()) db.emplace(ProjectDatabase::open(args.db));
-
   EglContext context;
   WalkthroughOptions options;
   options.width = width;
   options.height = height;
   options.prefetch = false;
   Walkthrough walk(args.file, options);
+  const std::optional<ProjectDatabase> db = openPackageDatabase(args.file, walk.package(), args.db);
   const double diagonal = glm::length(walk.worldMax() - walk.worldMin());
   camera.far_m = std::max(100.0, 10.0 * diagonal + glm::length(camera.position - walk.worldMin()));
   walk.renderSettled(camera);  // the pick reads the settled frame
@@ -140,7 +139,9 @@ void registerPickCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--fov", args->fov_deg, "Vertical field of view, degrees (default 60)");
   cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT (default 1280x720)");
   cmd->add_option("--pixel", args->pixel, "The pixel x,y, from the image's top left")->required();
-  cmd->add_option("--db", args->db, "Project database (SQLite) for the object's record")
+  cmd->add_option("--db", args->db,
+                  "Project database (SQLite) for the object's record; default: the one the "
+                  "package names")
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", args->json, "Print JSON");
   cmd->callback([args] { runPick(*args); });

@@ -7,6 +7,7 @@
 #include "command.h"
 #include "command_args.h"
 #include "preprocess_driver.h"
+#include "project_database.h"
 
 namespace tw {
 namespace {
@@ -24,6 +25,8 @@ struct PreprocessArgs {
   std::string visibility = "on";
   uint32_t visibility_rays = 1024;
   double view_cell_size_m = 0.0;
+  std::vector<std::string> exclude_layers;
+  std::string db;
 };
 
 void printSummary(const PreprocessReport& r, const std::string& output) {
@@ -98,7 +101,15 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--view-cell-size", args->view_cell_size_m,
                   "View cell edge in metres (default: chosen from the model's size)")
       ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--exclude-layer", args->exclude_layers,
+                  "Leave the objects of this layer out of the package (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_option("--db", args->db,
+                  "Project database (SQLite) the objects' keys refer to: the package names it, "
+                  "so pick, find and view open it without --db")
+      ->check(CLI::ExistingFile);
   cmd->callback([args, &global] {
+    if (!args->db.empty()) ProjectDatabase::open(args->db);  // a bad database fails before the build
     auto progress = makeCommandProgress(global);
     PreprocessOptions options;
     for (const auto& input : args->inputs) options.inputs.emplace_back(input);
@@ -114,6 +125,8 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.visibility = args->visibility == "on";
     options.visibility_rays = args->visibility_rays;
     options.view_cell_size_m = args->view_cell_size_m;
+    options.exclude_layers = args->exclude_layers;
+    options.database = args->db;
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);
   });

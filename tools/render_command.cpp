@@ -69,6 +69,7 @@ struct RenderArgs {
   std::vector<std::string> isolate_layers;
   std::string isolate_keys;  // FILE or KEY,KEY,...
   std::string select_keys;
+  bool xray_others = false;
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -96,6 +97,9 @@ void validateArgs(const RenderArgs& args) {
   if (path_sources != 1)
     throw std::runtime_error("give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES");
   if (args.png && args.out_dir.empty()) throw std::runtime_error("--png needs --out DIR");
+  if (args.xray_others && args.isolate_layers.empty() && args.isolate_keys.empty() &&
+      args.select_keys.empty())
+    throw std::runtime_error("--xray-others needs --isolate-layer, --isolate-keys or --select");
 }
 
 WalkthroughOptions walkthroughOptions(const RenderArgs& args, int width, int height) {
@@ -340,19 +344,23 @@ void writeRenderOutputs(const std::filesystem::path& out_dir, const std::vector<
   std::fclose(f);
 }
 
-// --hide-layer, --isolate-layer, --isolate-keys and --select as object states: isolating hides
-// every object but those named (layers and keys together), hiding then hides the layers named.
+// --hide-layer, --isolate-layer, --isolate-keys, --xray-others and --select as object states:
+// isolating hides every object but those named (layers and keys together), or X-rays them with
+// --xray-others (which, with a selection alone, X-rays all but the selection); hiding then hides
+// the layers named.
 void applyObjectStates(const RenderArgs& args, Walkthrough& walk) {
   const PackageView& view = walk.package();
   ObjectStates& states = walk.objectStates();
+  const uint32_t others = args.xray_others ? kObjectXray : kObjectHidden;
   if (!args.isolate_layers.empty() || !args.isolate_keys.empty()) {
-    states.setAll(kObjectHidden, true);
+    states.setAll(others, true);
     for (const std::string& name : args.isolate_layers)
-      for (uint32_t o : objectsOfLayer(view, layerIndex(view, name)))
-        states.set(o, kObjectHidden, false);
+      for (uint32_t o : objectsOfLayer(view, layerIndex(view, name))) states.set(o, others, false);
     if (!args.isolate_keys.empty())
       for (uint32_t o : objectsWithKeys(view, parseKeyList(args.isolate_keys)))
-        states.set(o, kObjectHidden, false);
+        states.set(o, others, false);
+  } else if (args.xray_others) {
+    states.setAll(kObjectXray, true);  // selected objects stay opaque (object_states.h)
   }
   for (const std::string& name : args.hide_layers)
     for (uint32_t o : objectsOfLayer(view, layerIndex(view, name))) states.set(o, kObjectHidden, true);
@@ -483,7 +491,11 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--isolate-keys", args->isolate_keys,
                   "Show only the objects with these database keys: FILE (one a line) or K1,K2,...");
   cmd->add_option("--select", args->select_keys,
-                  "Select (tint) the objects with these database keys: FILE or K1,K2,...");
+                  "Select (tint and outline) the objects with these database keys: FILE or "
+                  "K1,K2,...");
+  cmd->add_flag("--xray-others", args->xray_others,
+                "Draw the objects not isolated (or, with --select alone, not selected) ghosted "
+                "instead of hiding them");
   cmd->add_flag("--check-occlusion", args->check_occlusion,
                 "Draw each frame's cut again without occlusion culling and count the pixels "
                 "whose object id differs (occlusion_lost_px)");

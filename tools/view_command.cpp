@@ -32,6 +32,7 @@
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_pick.h"
+#include "package_database.h"
 #include "project_database.h"
 #include "view_script.h"
 #include "view_selection.h"
@@ -449,10 +450,9 @@ void runView(const ViewArgs& args) {
   parseImageSize(args.size, "--size", width, height);
   GlfwSession glfw;
   ViewerWindow window(width, height);
-  std::optional<ProjectDatabase> db;
-  if (!args.db.empty()) db.emplace(ProjectDatabase::open(args.db));
   const WalkthroughOptions options = viewOptions(args, window.get());
   Walkthrough walk(args.file, options);
+  const std::optional<ProjectDatabase> db = openPackageDatabase(args.file, walk.package(), args.db);
   runViewLoop(args, window.get(), walk, options, db ? &*db : nullptr);
 }
 
@@ -473,7 +473,9 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--target-fps", args->target_fps, "Adapt tau to hold this frame rate");
   cmd->add_option("--frames", args->frames, "Quit after this many frames (scripted runs)");
   cmd->add_option("--screenshot", args->screenshot, "With --frames: save the last frame here");
-  cmd->add_option("--db", args->db, "Project database (SQLite): the picked object's record")
+  cmd->add_option("--db", args->db,
+                  "Project database (SQLite): the picked object's record; default: the one the "
+                  "package names")
       ->check(CLI::ExistingFile);
   cmd->add_option("--script", args->script,
                   "Clicks and keys at given frames: FRAME click X Y, ctrl-click, double-click, "

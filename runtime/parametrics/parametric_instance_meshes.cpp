@@ -382,10 +382,11 @@ struct ParametricInstanceMeshes::Impl {
       return;
     }
     const bool row_head = !(entry & kAlone) && b.row >= 2;
-    // A hidden object's instance costs nothing; a row drawn whole still goes, and its fragments
-    // leave out the hidden members (parametric_shaders.h).
+    // An instance this pass skips (hidden, or ghosted in the opaque pass) costs nothing; a row
+    // drawn whole still goes, and its fragments leave out the skipped members
+    // (parametric_shaders.h).
     if (!row_head && choice.view.objects &&
-        (choice.view.objects->flags(view->instances()[i].object) & kObjectHidden))
+        !drawnIn(choice.view.objects->flags(view->instances()[i].object), choice.view.surface))
       return;
     Form row_form;
     if (row_head) {

@@ -74,9 +74,10 @@ struct InstanceLodView {
   // Second pass: whether an eye-relative box is hidden by this frame's pyramid. Called from
   // several threads at once.
   std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
-  // Instances of hidden objects are not expanded (object_states.h); read by the workers, so it
-  // must not change while a frame's expansion runs.
+  // Instances of objects this surface pass skips are not expanded (object_states.h); read by
+  // the workers, so it must not change while a frame's expansion runs.
   const ObjectStates* objects = nullptr;
+  SurfacePass surface = SurfacePass::Opaque;
 };
 
 struct InstanceLodStats {

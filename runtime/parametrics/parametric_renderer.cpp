@@ -146,6 +146,7 @@ struct ParametricRenderer::Impl {
     lod_view.pass = camera.pass;
     lod_view.box_hidden = camera.box_hidden;
     lod_view.objects = camera.objects;
+    lod_view.surface = camera.surface;
     return lod_view;
   }
 
@@ -264,17 +265,7 @@ ParametricDrawStats ParametricRenderer::drawInto(unsigned framebuffer,
 
   GlRenderer& r = *s.renderer;
   const glm::mat4& view_projection = r.viewProjection();
-  glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-  glViewport(0, 0, r.width(), r.height());
-  glDisable(GL_SCISSOR_TEST);
-  glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-  glDepthMask(GL_TRUE);
-  glClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
-  glEnable(GL_DEPTH_TEST);
-  glDepthFunc(GL_GREATER);
-  glDisable(GL_BLEND);
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectColorBinding, r.objectColorBuffer());
-  glBindBufferBase(GL_SHADER_STORAGE_BUFFER, gl::kObjectStateBinding, r.objectStateBuffer());
+  r.bindSurfaceState(framebuffer);
 
   // Impostors: commands and per-cluster records of every type in one upload each.
   s.draws.clear();

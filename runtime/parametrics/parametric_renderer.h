@@ -62,8 +62,10 @@ struct ParametricView {
   // "Occlusion"), and the test of an eye-relative box against this frame's pyramid.
   InstancePass pass = InstancePass::All;
   std::function<bool(const glm::vec3& lo, const glm::vec3& hi)> box_hidden;
-  // Tessellated mode: instances of hidden objects are not expanded (object_states.h).
+  // Tessellated mode: instances of objects this surface pass skips are not expanded
+  // (object_states.h): the hidden ones, and in the opaque pass the ghosted ones.
   const ObjectStates* objects = nullptr;
+  SurfacePass surface = SurfacePass::Opaque;  // the renderer's pass this draw belongs to
 };
 
 struct ParametricDrawStats {

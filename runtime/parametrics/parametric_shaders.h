@@ -156,7 +156,7 @@ void main() {
   GpuInstance g = instances[v_instance];
   out_color = shadeSurface(objectBaseColor(g.object), normalize(v_normal_matrix * v_face_normal),
                            v_pos_eye);
-  if (objectHidden(g.object)) discard;
+  if (objectSkipped(g.object)) discard;
   out_id = g.object + 1u;
 }
 )";
@@ -315,7 +315,7 @@ void main() {
   gl_FragDepth = min(gl_FragDepth, gl_FragCoord.z);  // keep the depth_less promise to the rounding
 #endif
   out_color = shadeSurface(objectBaseColor(g.object), normalize(v_normal_matrix * n), hit_eye);
-  if (objectHidden(g.object)) discard;
+  if (objectSkipped(g.object)) discard;
   out_id = g.object + 1u;
 }
 )";
@@ -392,7 +392,7 @@ void main() {
   vec3 n = facet;
   if (len > 0.25) n = dot(v_normal, facet) < 0.0 ? -v_normal / len : v_normal / len;
   out_color = shadeSeenSide(v_base, n, pos_eye);
-  if (objectHidden(v_object)) discard;
+  if (objectSkipped(v_object)) discard;
   out_id = v_object + 1u;
 }
 )";
@@ -414,8 +414,8 @@ void main() {
   v_object = object;
   v_color = shadeSeenSide(objectBaseColor(object), normalize(-position), position);
   gl_Position = view_projection * vec4(position, 1.0);
-  // A hidden object's point goes outside the clip volume: nothing of it is drawn.
-  if (objectHidden(object)) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+  // A point of an object this pass skips goes outside the clip volume: nothing of it is drawn.
+  if (objectSkipped(object)) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
 }
 )";
 }
@@ -471,7 +471,7 @@ void main() {
   vec3 facet = facetNormal(pos_eye);
   if (dot(facet, pos_eye) > 0.0) facet = -facet;
   out_color = shadeSeenSide(objectBaseColor(object), facet, pos_eye);
-  if (objectHidden(object)) discard;
+  if (objectSkipped(object)) discard;
   out_id = object + 1u;
 }
 )";
@@ -541,7 +541,7 @@ void main() {
   vec4 base = v_base;
   if (object != v_object) base = objectBaseColor(object);
   out_color = shadeSeenSide(base, n, pos_eye);
-  if (objectHidden(object)) discard;
+  if (objectSkipped(object)) discard;
   out_id = object + 1u;
 }
 )";
