@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <set>
 #include <chrono>
 #include <cstdlib>
 #include <string>
@@ -141,7 +142,8 @@ int tintedPixels(const test::ScreenImage& before, const test::ScreenImage& after
 
 // Clicking a valve, as a script of the viewer does at frame 30: the X screen shows the valve
 // tinted and the properties panel grown by its record, and the viewer names the valve and its
-// record. The capture is kept as x-screen-pick.png.
+// record from the database the package names (no --db). The capture is kept as
+// x-screen-pick.png.
 TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
   if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
   const auto dir = test::scratchDir();
@@ -160,7 +162,7 @@ TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
     test::CommandResult picked = test::runTerawalk(
         "pick " + test::generatedPlant().package.string() + " --eye " +
         test::vec3Arg(camera.position) + " --target " + test::vec3Arg(centre) +
-        " --size 800x600 --pixel 400,300 --json");
+        " --size 1024x768 --pixel 512,384 --json");
     ASSERT_EQ(picked.exit_code, 0) << picked.output;
     const auto j = nlohmann::json::parse(picked.output);
     if (!j["object"].is_null() && j["object"] == o) key = std::string(view.objectDbKey(o));
@@ -171,20 +173,19 @@ TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
                 camera.position.y, camera.position.z, glm::degrees(camera.yaw_rad),
                 glm::degrees(camera.pitch_rad));
   test::writeFile(dir / "valve.path", std::string("# terawalk camera path 1\n") + line);
-  test::writeFile(dir / "click.script", "30 click 400 300\n150 quit\n");
+  test::writeFile(dir / "click.script", "30 click 512 384\n150 quit\n");
 
   test::XvfbScreen screen(dir / "x", 1024, 768);
   test::BackgroundProcess viewer(
-      {TW_TERAWALK_EXE, "view", test::generatedPlant().package.string(), "--size", "800x600", "--path",
-       (dir / "valve.path").string(), "--db", test::generatedPlant().db.string(), "--script",
-       (dir / "click.script").string()},
+      {TW_TERAWALK_EXE, "view", test::generatedPlant().package.string(), "--size", "1024x768",
+       "--path", (dir / "valve.path").string(), "--script", (dir / "click.script").string()},
       {"DISPLAY=" + screen.display()}, dir / "view.log");
   std::optional<test::ScreenImage> before, after;
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (viewer.running() && std::chrono::steady_clock::now() < deadline) {
     const bool picked = test::readFile(dir / "view.log").find("view: picked") != std::string::npos;
     auto capture = screen.capture();
-    if (capture && windowDrawn(*capture, 800, 600) &&
+    if (capture && windowDrawn(*capture, 1024, 768) &&
         showsPanel(countPanelPixels(*capture, 12, 40, 200, 90)))
       (picked ? after : before) = std::move(capture);
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -194,22 +195,150 @@ TEST(Viewer, ClickingAValveSelectsItAndShowsItsRecord) {
   EXPECT_NE(log.find("key " + key + " at"), std::string::npos) << log;
   EXPECT_NE(log.find("record found"), std::string::npos) << log;
   ASSERT_TRUE(before && after) << log;
-  // The window's part of the screen, for docs/images/viewer-pick.png.
-  std::vector<uint8_t> window(800 * 600 * 4);
-  for (int y = 0; y < 600; ++y)
-    std::copy_n(after->at(0, y), 800 * 4, &window[size_t(y) * 800 * 4]);
-  writePngRgba(dir / "x-screen-pick.png", 800, 600, window);
+  // The screen is the window, for docs/images/viewer-pick.png.
+  writePngRgba(dir / "x-screen-pick.png", after->width, after->height, after->rgba);
   writePngRgba(dir / "x-screen-before.png", before->width, before->height, before->rgba);
   // The valve, tinted, at the centre.
-  EXPECT_GT(tintedPixels(*before, *after, 400, 300, 60), 100);
-  EXPECT_EQ(tintedPixels(*before, *after, 700, 500, 60), 0);  // elsewhere nothing changed
+  EXPECT_GT(tintedPixels(*before, *after, 512, 384, 60), 100);
+  EXPECT_EQ(tintedPixels(*before, *after, 850, 600, 60), 0);  // elsewhere nothing changed
   // The properties panel at the top right has grown by the record's lines (right of the
   // statistics panel, where the model showed before), down to its help line.
-  const PanelCount grown_after = countPanelPixels(*after, 530, 90, 790, 280);
-  const PanelCount grown_before = countPanelPixels(*before, 530, 90, 790, 280);
+  const PanelCount grown_after = countPanelPixels(*after, 580, 90, 1010, 280);
+  const PanelCount grown_before = countPanelPixels(*before, 580, 90, 1010, 280);
   EXPECT_GT(grown_after.dark * 2, grown_after.total) << grown_after.dark;
   EXPECT_LT(grown_before.dark * 2, grown_before.total) << grown_before.dark;
-  EXPECT_GT(countPanelPixels(*after, 530, 276, 790, 292).text, 20);
+  EXPECT_GT(countPanelPixels(*after, 580, 276, 1010, 292).text, 20);
+}
+
+// Pixels of the model in the window's part right of the review panel (not the background).
+int modelPixels(const test::ScreenImage& screen, int x0, int y0, int x1, int y1) {
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const uint8_t* p = screen.at(x, y);
+      n += std::abs(p[0] - 184) > 12 || std::abs(p[1] - 204) > 12 || std::abs(p[2] - 230) > 12;
+    }
+  return n;
+}
+
+// Pixels of the selection outline's colour (gl_shaders.h kOutline).
+int outlinePixels(const test::ScreenImage& screen, int x0, int y0, int x1, int y1) {
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const uint8_t* p = screen.at(x, y);
+      n += p[0] == 255 && p[1] == 219 && p[2] == 0;
+    }
+  return n;
+}
+
+// Runs the viewer on `package` with `script` under a fresh Xvfb; keeps the last capture taken
+// before the log held `first_marker` and the last one after it held `marker`.
+struct ScriptedRun {
+  std::optional<test::ScreenImage> before, after;
+  std::string log;
+  int exit_code = -1;
+};
+ScriptedRun runViewerScript(const std::filesystem::path& package, const std::filesystem::path& dir,
+                            const std::string& name, const std::string& script,
+                            const std::string& first_marker, const std::string& marker) {
+  const auto script_file = dir / (name + ".script");
+  const auto log_file = dir / (name + ".log");
+  test::writeFile(script_file, script);
+  test::XvfbScreen screen(dir / ("x-" + name), 1024, 768);
+  test::BackgroundProcess viewer({TW_TERAWALK_EXE, "view", package.string(), "--size", "1024x768",
+                                  "--script", script_file.string()},
+                                 {"DISPLAY=" + screen.display()}, log_file);
+  ScriptedRun run;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
+  while (viewer.running() && std::chrono::steady_clock::now() < deadline) {
+    const std::string log = test::readFile(log_file);
+    const bool started = log.find(first_marker) != std::string::npos;
+    const bool reached = log.find(marker) != std::string::npos;
+    auto capture = screen.capture();
+    if (capture && windowDrawn(*capture, 1024, 768) &&
+        showsPanel(countPanelPixels(*capture, 12, 40, 200, 90))) {
+      if (!started) run.before = std::move(capture);
+      else if (reached) run.after = std::move(capture);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  run.exit_code = viewer.wait();
+  run.log = test::readFile(log_file);
+  return run;
+}
+
+// The review panel as a reviewer uses it, through the viewer's script: a query over the project
+// database (the one the package names), its results isolated and selected, and both saved as
+// sets next to the package; then, in a second session, the visibility set restored. The X screen
+// shows the review panel, the plant reduced to the sea-water service and outlined, and the same
+// plant again after the restore; the sets file holds exactly what `terawalk find` finds.
+// The capture is kept as x-screen-review.png.
+TEST(Viewer, ReviewPanelQueriesIsolatesAndRestoresSets) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  // The sets live next to the package: a copy of it here, so the shared one stays clean.
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  std::filesystem::copy_file(test::generatedPlant().db, dir / "plant.db");
+  const std::string query = "service = 'sea water'";
+  const ScriptedRun run = runViewerScript(
+      package, dir, "review",
+      "20 query " + query + "\n25 isolate-results\n30 select-results\n"
+      "35 save-selection sea water\n40 save-visibility sea water only\n150 quit\n",
+      "view: query", "saved set 'sea water only'");
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  ASSERT_TRUE(run.before && run.after) << run.log;
+  writePngRgba(dir / "x-screen-review.png", run.after->width, run.after->height, run.after->rgba);
+  EXPECT_NE(run.log.find("query '" + query + "': "), std::string::npos) << run.log;
+
+  // The review panel, left under the statistics: dark, with its layer rows' text.
+  const PanelCount panel = countPanelPixels(*run.after, 12, 240, 220, 520);
+  EXPECT_GT(panel.dark * 2, panel.total) << panel.dark;
+  EXPECT_GT(panel.text, 500);
+  // Right of it, the plant shrank to the sea-water service, outlined as selected.
+  const int all = modelPixels(*run.before, 460, 120, 1024, 768);
+  const int isolated = modelPixels(*run.after, 460, 120, 1024, 768);
+  EXPECT_GT(isolated, 50);
+  EXPECT_LT(isolated * 3, all) << isolated << " of " << all;
+  EXPECT_GT(outlinePixels(*run.after, 460, 120, 1024, 768), 20);
+  EXPECT_EQ(outlinePixels(*run.before, 460, 120, 1024, 768), 0);
+
+  // The file: the selection is what find finds, by scene id; the visibility hides the rest.
+  const PackageView view = PackageView::open(package);
+  test::CommandResult found =
+      test::runTerawalk("find " + package.string() + " \"" + query + "\" --json");
+  ASSERT_EQ(found.exit_code, 0) << found.output;
+  std::set<uint32_t> expected;
+  const nlohmann::json found_json = nlohmann::json::parse(found.output);
+  for (const auto& o : found_json["objects"])
+    expected.insert(view.objects()[o["object"].get<uint32_t>()].id);
+  ASSERT_FALSE(expected.empty()) << found.output;
+  const auto sets = nlohmann::json::parse(test::readFile(dir / "plant.sets.json"));
+  ASSERT_EQ(sets["sets"].size(), 2u) << sets.dump();
+  const auto selected = sets["sets"][0]["selected"].get<std::vector<uint32_t>>();
+  EXPECT_EQ(std::set<uint32_t>(selected.begin(), selected.end()), expected);
+  EXPECT_EQ(sets["sets"][1]["kind"], "visibility");
+  EXPECT_EQ(sets["sets"][1]["hidden"].size(), view.objects().size() - expected.size());
+
+  // A second session restores the visibility from the file: the same plant shows again.
+  const ScriptedRun again = runViewerScript(
+      package, dir, "restore", "20 restore sea water only\n150 quit\n", "restored set",
+      "restored set");
+  ASSERT_EQ(again.exit_code, 0) << again.log;
+  ASSERT_TRUE(again.before && again.after) << again.log;
+  const int restored = modelPixels(*again.after, 460, 120, 1024, 768);
+  EXPECT_LT(std::abs(restored - isolated), isolated / 4 + 20) << restored << " against " << isolated;
+
+  // A damaged sets file is reported, naming it, and never written over.
+  test::writeFile(dir / "plant.sets.json", "{\"terawalk_selection_sets\": 1, \"sets\": [");
+  const ScriptedRun damaged = runViewerScript(package, dir, "damaged",
+                                              "20 save-visibility again\n60 quit\n", "not saved",
+                                              "not saved");
+  EXPECT_EQ(damaged.exit_code, 0) << damaged.log;
+  EXPECT_NE(damaged.log.find("plant.sets.json: not JSON"), std::string::npos) << damaged.log;
+  EXPECT_NE(damaged.log.find("set 'again' not saved"), std::string::npos) << damaged.log;
+  EXPECT_EQ(test::readFile(dir / "plant.sets.json"), "{\"terawalk_selection_sets\": 1, \"sets\": [");
 }
 
 }  // namespace

@@ -8,8 +8,10 @@
 // mode (off, hzb, pvs; --occlusion picks the first) and the parametrics mode (impostor,
 // tessellated, off; --parametrics picks the first, auto by default, P cycles) at run time.
 // A click selects the object under the cursor (Ctrl adds or removes, a double click frames the
-// selection, Esc clears it) and the properties panel shows its record from --db
-// (view_selection.h); --script plays clicks and keys at given frames (view_script.h).
+// selection, Esc clears it) and the properties panel shows its record from the project database
+// (view_selection.h); the review panel hides, isolates and X-rays layers, searches names, keys
+// and the database, and saves selection sets next to the package (view_review.h); --script
+// plays clicks, keys and the review's actions at given frames (view_script.h).
 // The same Walkthrough as `terawalk render` draws every frame.
 #include <GL/gl.h>
 #include <GLFW/glfw3.h>
@@ -34,6 +36,8 @@
 #include "object_pick.h"
 #include "package_database.h"
 #include "project_database.h"
+#include "selection_sets.h"
+#include "view_review.h"
 #include "view_script.h"
 #include "view_selection.h"
 
@@ -198,14 +202,11 @@ struct PathRecorder {
   }
 };
 
-// The overlay: the frame's statistics and the settings' controls.
-void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
-               bool recording, const ViewSelection& selection, int window_width) {
-  ImGui_ImplOpenGL3_NewFrame();
-  ImGui_ImplGlfw_NewFrame();
-  ImGui::NewFrame();
+// The frame's statistics, and the settings' controls under a header that opens them.
+void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
+                    bool recording) {
   ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
-  ImGui::Begin("TeraWalk");
+  ImGui::Begin("TeraWalk", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
   ImGui::Text("%.1f ms  (%.0f fps)   cut %.2f ms   gpu %.2f ms", stats.frame_ms,
               stats.frame_ms > 0 ? 1000.0 / stats.frame_ms : 0.0, stats.cpu_cut_ms, stats.gpu_ms);
   ImGui::Text("triangles %llu   clusters %u   visited %u",
@@ -226,6 +227,12 @@ void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator&
   if (stats.parametric_skipped > 0)
     ImGui::TextColored(ImVec4(1, 0.7f, 0.2f, 1), "parametric clusters not drawn: %u",
                        stats.parametric_skipped);
+  if (!ImGui::CollapsingHeader("Settings")) {
+    ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
+                nav.orbit ? "orbit" : "walk", nav.speed_mps, recording ? " (on)" : "");
+    ImGui::End();
+    return;
+  }
   ImGui::SliderFloat("tau (px)", &settings.tau, 0.25f, 64.0f, "%.2f", ImGuiSliderFlags_Logarithmic);
   ImGui::SliderFloat("FOV (deg)", &settings.fov_deg, 20.0f, 120.0f, "%.0f");
   ImGui::SliderFloat("near (m)", &settings.near_m, 0.01f, 10.0f, "%.2f",
@@ -244,7 +251,19 @@ void drawPanel(const FrameStats& stats, ViewSettings& settings, const Navigator&
   ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
               nav.orbit ? "orbit" : "walk", nav.speed_mps, recording ? " (on)" : "");
   ImGui::End();
+}
+
+// The overlay's windows: statistics and settings (top left), properties (top right), review
+// (left, below the statistics, as tall as the window allows; it scrolls).
+void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
+                 bool recording, const ViewSelection& selection, ViewReview& review,
+                 int window_width, int window_height) {
+  ImGui_ImplOpenGL3_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+  drawStatsPanel(stats, settings, nav, recording);
   selection.drawPanel(float(window_width) - 8.0f, 8.0f);
+  review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
@@ -287,17 +306,50 @@ class ClickDetector {
   double last_click_s_ = -1.0;
 };
 
-// Double click: the camera backs off along its view until the selection's box fills about two
-// thirds of the image; orbit mode circles the selection from then on.
-void frameSelection(const ViewSelection& selection, Camera& camera, Navigator& nav) {
-  glm::dvec3 lo, hi;
-  if (!selection.bounds(lo, hi)) return;
+// Double click, or "zoom to" the review's results: the camera backs off along its view until the
+// box fills about two thirds of the image; orbit mode circles the box from then on.
+void frameBox(const glm::dvec3& lo, const glm::dvec3& hi, Camera& camera, Navigator& nav) {
   const glm::dvec3 centre = 0.5 * (lo + hi);
   const double radius = std::max(0.5 * glm::length(hi - lo), 0.05);
   const double distance = 1.5 * radius / std::tan(0.5 * camera.fov_y_rad);
   camera.position = centre - camera.forward() * distance;
   nav.orbit_target = centre;
   nav.orbit_distance = distance;
+}
+
+void frameSelection(const ViewSelection& selection, Camera& camera, Navigator& nav) {
+  glm::dvec3 lo, hi;
+  if (selection.bounds(lo, hi)) frameBox(lo, hi, camera, nav);
+}
+
+// A review action of a script, done as the panel's button does it.
+void runReviewAction(ViewReview& review, const ViewEvent& e) {
+  uint32_t layer = 0;
+  const std::string& a = e.action;
+  if (a == "hide-layer" || a == "show-layer" || a == "isolate-layer" || a == "xray-others") {
+    if (!review.layerNamed(e.text, layer)) return;
+    if (a == "hide-layer" || a == "show-layer") review.setLayerHidden(layer, a == "hide-layer");
+    else if (a == "isolate-layer") review.isolateLayer(layer);
+    else review.xrayOthers(layer);
+  } else if (a == "show-all") {
+    review.showAll();
+  } else if (a == "search") {
+    review.search(e.text);
+  } else if (a == "query") {
+    review.query(e.text, {});
+  } else if (a == "select-results") {
+    review.selectResults();
+  } else if (a == "isolate-results") {
+    review.isolateResults();
+  } else if (a == "zoom-results") {
+    review.zoomToResults();
+  } else if (a == "save-selection") {
+    review.saveSelection(e.text);
+  } else if (a == "save-visibility") {
+    review.saveVisibility(e.text);
+  } else if (a == "restore") {
+    review.restore(e.text);
+  }
 }
 
 WalkthroughOptions viewOptions(const ViewArgs& args, GLFWwindow* window) {
@@ -345,6 +397,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   int shot = 0;
   KeyPresses keys(window);
   ViewSelection selection(walk.package(), walk.objectStates(), db);
+  ViewReview review(walk.package(), walk.objectStates(), selection, db,
+                    selectionSetsPathFor(args.file));
   ClickDetector clicks;
   const std::vector<ViewEvent> script =
       args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
@@ -416,6 +470,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
         case ViewEvent::Kind::CtrlClick: pickAt(e.x, e.y, true, false); break;
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
+        case ViewEvent::Kind::Review: runReviewAction(review, e); break;
         case ViewEvent::Kind::Key:
           if (e.key == GLFW_KEY_ESCAPE) escape();
           if (e.key == GLFW_KEY_O) nav.orbit = !nav.orbit;
@@ -426,13 +481,14 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       }
     }
 
+    if (glm::dvec3 lo, hi; review.takeZoomRequest(lo, hi)) frameBox(lo, hi, camera, nav);
     if (keys.pressed(GLFW_KEY_F12)) {
       char name[64];
       std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
       saveScreenshot(walk.renderer(), name);
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
-    drawPanel(stats, settings, nav, recorder.on, selection, fb_w);
+    drawOverlay(stats, settings, nav, recorder.on, selection, review, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

@@ -22,6 +22,22 @@ int keyCode(const std::string& name) {
 
 }  // namespace
 
+bool reviewActionTakesText(const std::string& action, bool& takes_text) {
+  static const char* const with_text[] = {"hide-layer", "show-layer", "isolate-layer",
+                                          "xray-others", "search", "query", "save-selection",
+                                          "save-visibility", "restore"};
+  static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
+                                             "zoom-results"};
+  for (const char* a : with_text)
+    if (action == a) return takes_text = true;
+  for (const char* a : without_text)
+    if (action == a) {
+      takes_text = false;
+      return true;
+    }
+  return false;
+}
+
 std::vector<ViewEvent> readViewScript(const std::filesystem::path& path) {
   std::ifstream in(path);
   if (!in) throw std::runtime_error(path.string() + ": cannot open the viewer script");
@@ -54,8 +70,20 @@ std::vector<ViewEvent> readViewScript(const std::filesystem::path& path) {
       e.kind = ViewEvent::Kind::Key;
     } else if (kind == "quit") {
       e.kind = ViewEvent::Kind::Quit;
+    } else if (bool takes_text = false; reviewActionTakesText(kind, takes_text)) {
+      e.kind = ViewEvent::Kind::Review;
+      e.action = kind;
+      if (takes_text) {
+        std::getline(words >> std::ws, e.text);
+        while (!e.text.empty() && (e.text.back() == ' ' || e.text.back() == '\r'))
+          e.text.pop_back();
+        if (e.text.empty()) fail("'" + kind + "' needs a text after it");
+      }
     } else {
-      fail("unknown event '" + kind + "' (click, ctrl-click, double-click, key, quit)");
+      fail("unknown event '" + kind +
+           "' (click, ctrl-click, double-click, key, quit, or a review action: hide-layer, "
+           "show-layer, isolate-layer, xray-others, show-all, search, query, select-results, "
+           "isolate-results, zoom-results, save-selection, save-visibility, restore)");
     }
     std::string extra;
     if (words >> extra) fail("unexpected '" + extra + "' at the end of the line");

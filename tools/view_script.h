@@ -8,6 +8,15 @@
 //   FRAME key NAME           escape, o, p, r, f12
 //   FRAME quit
 //
+// and the review panel's actions (view_review.h), as its buttons do them; TEXT is the rest of
+// the line:
+//   FRAME hide-layer TEXT | show-layer TEXT | isolate-layer TEXT | xray-others TEXT
+//   FRAME show-all
+//   FRAME search TEXT        names and keys holding TEXT
+//   FRAME query TEXT         a WHERE clause over the project database (no values bound)
+//   FRAME select-results | isolate-results | zoom-results
+//   FRAME save-selection TEXT | save-visibility TEXT | restore TEXT
+//
 // Events run after their frame is drawn, in file order.
 #pragma once
 
@@ -18,12 +27,17 @@
 namespace tw {
 
 struct ViewEvent {
-  enum class Kind { Click, CtrlClick, DoubleClick, Key, Quit };
+  enum class Kind { Click, CtrlClick, DoubleClick, Key, Quit, Review };
   int frame = 0;
   Kind kind = Kind::Click;
   int x = 0, y = 0;  // clicks
   int key = 0;       // GLFW key code
+  std::string action;  // Review: the action's name, as in the script
+  std::string text;    // Review: its argument (layer, search text, query, set name)
 };
+
+// Review actions a script may name, and whether each takes TEXT.
+bool reviewActionTakesText(const std::string& action, bool& takes_text);
 
 // Throws std::runtime_error naming the file, the line and the reason.
 std::vector<ViewEvent> readViewScript(const std::filesystem::path& path);

@@ -39,6 +39,15 @@ void ViewSelection::click(const std::optional<Pick>& pick, bool toggle) {
   std::fflush(stdout);
 }
 
+void ViewSelection::select(const std::vector<uint32_t>& objects) {
+  clear();
+  for (uint32_t o : objects) {
+    if (o >= view_.objects().size() || (states_.flags(o) & kObjectSelected)) continue;
+    selected_.push_back(o);
+    states_.set(o, kObjectSelected, true);
+  }
+}
+
 void ViewSelection::clear() {
   for (uint32_t o : selected_) states_.set(o, kObjectSelected, false);
   selected_.clear();

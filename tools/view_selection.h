@@ -24,6 +24,8 @@ class ViewSelection {
   // A click: the picked object alone becomes the selection (nothing picked clears it); with
   // `toggle` (Ctrl), it is added, or removed when it was selected.
   void click(const std::optional<Pick>& pick, bool toggle);
+  // These objects become the selection (search results, a restored set); no pick is shown.
+  void select(const std::vector<uint32_t>& objects);
   void clear();
   bool empty() const { return selected_.empty(); }
   const std::vector<uint32_t>& selected() const { return selected_; }
