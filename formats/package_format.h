@@ -25,8 +25,10 @@
 //       kInstanceCoveredFaces, and header flag kHeaderCoveredFacesMarked saying the search ran.
 //       Earlier packages stay valid (nothing is marked); a 1.4 view rejects marked ones.
 //   1.6 (2026-12) the project database's path (PackageHeader::database_path_*, in the string
-//       pool; relative to the package's folder unless absolute), taken from two reserved fields.
-//       Earlier packages stay valid (no path); a 1.5 view rejects a package that names one.
+//       pool; relative to the package's folder unless absolute), taken from two reserved fields;
+//       ClusterRecord::flags kClusterFarProxy marks the clusters of far-proxy groups. Earlier
+//       packages stay valid (no path, no cluster marked); a 1.5 view rejects a package that names
+//       a database or marks a cluster.
 #pragma once
 
 #include <bit>
@@ -191,7 +193,7 @@ struct ClusterRecord {
   uint32_t parent_group;    // group that simplifies this cluster, or kNone (root)
   uint16_t level;           // 0 = full resolution
   uint8_t kind;             // ClusterKind
-  uint8_t flags;            // 0 in 1.0
+  uint8_t flags;            // ClusterFlags (1.6; 0 before); a view rejects bits it does not know
   uint32_t page;            // Mesh: PageRecord index; Parametric: kNone
   uint32_t page_offset;     // Mesh: offset of the encoded cluster in the raw page (multiple of 16)
   uint32_t encoded_bytes;   // Mesh: bytes of the encoded cluster
@@ -204,6 +206,12 @@ struct ClusterRecord {
 };
 static_assert(sizeof(ClusterRecord) == 128);
 static_assert(offsetof(ClusterRecord, group) == 80 && offsetof(ClusterRecord, page) == 92);
+
+// ClusterRecord::flags. A far proxy: the cluster was made by a group that remeshed its free
+// parts into one closed shell (preprocess/far_proxy.h), so its triangles stand for whole parts
+// rather than simplify them; set on mesh clusters above level 0 only.
+inline constexpr uint8_t kClusterFarProxy = 1u << 0;
+inline constexpr uint8_t kKnownClusterFlags = kClusterFarProxy;
 
 // One simplification step. The clusters it produced are stored contiguously in the cluster table
 // (possibly none, when it dropped small parts), so the runtime can test a whole group (frustum,

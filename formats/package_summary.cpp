@@ -59,6 +59,10 @@ PackageSummary summarizePackage(const PackageView& view) {
     l.max_error_m = std::max(l.max_error_m, c.error);
     l.mean_error_m += c.error;
     s.all_level_triangles += c.triangle_count;
+    if (c.flags & pkg::kClusterFarProxy) {
+      ++s.far_proxy_clusters;
+      s.far_proxy_triangles += c.triangle_count;
+    }
   }
   for (PackageLevelSummary& l : s.levels) {
     if (l.clusters) {

@@ -41,6 +41,7 @@ struct PackageSummary {
   uint32_t level_count = 0;
   uint64_t total_triangles = 0;      // level 0, as the header records
   uint64_t all_level_triangles = 0;  // every level
+  uint64_t far_proxy_clusters = 0, far_proxy_triangles = 0;  // pkg::kClusterFarProxy
   uint32_t max_cluster_triangles = 0;
   uint32_t target_page_bytes = 0;
   uint64_t input_hash = 0;

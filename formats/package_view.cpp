@@ -454,7 +454,11 @@ void PackageView::validateClusters() const {
       fail(at_c + 84, "cluster " + str(c) + " parent group " + str(r.parent_group) +
                           " is out of range or does not match its parent error and level" +
                           " (a child's level must be <= its parent group's)");
-    if (r.flags != 0) fail(at_c + 91, "cluster " + str(c) + " has unknown flags");
+    if ((r.flags & ~kKnownClusterFlags) != 0)
+      fail(at_c + 91, "cluster " + str(c) + " has unknown flags");
+    if ((r.flags & kClusterFarProxy) &&
+        (r.kind != static_cast<uint8_t>(ClusterKind::Mesh) || r.level == 0))
+      fail(at_c + 91, "cluster " + str(c) + " is marked a far proxy but is not a coarse mesh cluster");
     if (r.object_min > r.object_max || r.object_max >= objects_.size())
       fail(at_c + 112, "cluster " + str(c) + " object range [" + str(r.object_min) + ", " +
                            str(r.object_max) + "] is invalid (" + str(objects_.size()) +

@@ -126,6 +126,9 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
         lod.parent_lod_sphere = glm::vec4(cl.parent_lod_center, cl.parent_lod_radius + lod_slack);
       setClusterLod(r, lod, info.center, info.radius + lod_slack);
       r.kind = static_cast<uint8_t>(ClusterKind::Mesh);
+      if (cl.group < dag.groups.size() && dag.groups[cl.group].method == GroupMethod::Proxy &&
+          cl.level > 0)
+        r.flags |= kClusterFarProxy;
       r.triangle_count = info.triangle_count;
       r.vertex_count = info.vertex_count;
       r.object_min = info.object_min;

@@ -88,6 +88,9 @@ class Walkthrough {
   // the triangles drawn.
   uint64_t redrawUnculled();
 
+  // The last frame's mesh clusters of the cut (drawn or culled by occlusion), in draw order.
+  const std::vector<uint32_t>& lastCut() const { return full_order_; }
+
   OcclusionMode occlusion() const { return options_.occlusion; }
   // Switches the mode; the next hzb frame starts with no previous visible set.
   void setOcclusion(OcclusionMode mode);

@@ -6,12 +6,15 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
 #include "egl_context.h"
 #include "frame_loop.h"
 #include "object_pick.h"
+#include "page_codec.h"
+#include "package_view.h"
 #include "generated_plant_support.h"
 #include "test_support.h"
 
@@ -98,6 +101,76 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
       for (int a = 0; a < 3; ++a) EXPECT_NEAR(j["point"][a].get<double>(), pick->world[a], 1e-3);
     }
   }
+}
+
+// From far, a real MEP model (926 pipes, ducts and fittings) is drawn in part with far proxies:
+// shells that stand for whole groups of small parts. An object whose triangles in the frame's cut
+// are all in far-proxy clusters can only show through a proxy; picking its pixels names it, at a
+// point on its box grown by the proxy's error.
+TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
+  const auto model = test::sharedDataDir() / "duplex-mep.obj";
+  if (!std::filesystem::exists(model)) GTEST_SKIP() << "shared data not present";
+  const auto package = test::processScratchDir("pick_far_proxy") / "duplex-mep.twk";
+  test::CommandResult built =
+      test::runTerawalk("preprocess --quiet " + model.string() + " -o " + package.string());
+  ASSERT_EQ(built.exit_code, 0) << built.output;
+  EglContext context;
+  WalkthroughOptions options;
+  options.width = kWidth;
+  options.height = kHeight;
+  options.prefetch = false;
+  Walkthrough walk(package, options);
+  const PackageView& view = walk.package();
+  const glm::dvec3 lo = walk.worldMin(), hi = walk.worldMax();
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  const double diagonal = glm::length(hi - lo);
+  int proxy_pixels_picked = 0;
+  std::vector<uint8_t> raw;
+  DecodedCluster decoded;
+  for (double away : {1.5, 3.0, 4.5, 6.0, 9.0}) {
+    Camera camera;
+    camera.position = centre + glm::dvec3(-0.6, -0.8, 0.5) * (away * diagonal);
+    camera.lookAt(centre);
+    camera.far_m = 20.0 * diagonal;
+    walk.renderSettled(camera);
+    std::vector<uint32_t> ids;
+    walk.renderer().readObjectIds(ids, true);
+    // Per object, the largest error of the proxies that carry it, and whether any other
+    // cluster of the cut does.
+    std::vector<float> proxy_error(view.objects().size(), -1.0f);
+    std::vector<bool> elsewhere(view.objects().size(), false);
+    for (uint32_t c : walk.lastCut()) {
+      const pkg::ClusterRecord& r = view.clusters()[c];
+      view.readPage(r.page, raw);
+      view.decodeCluster(c, raw, decoded);
+      for (uint32_t o : decoded.triangle_objects) {
+        if (r.flags & pkg::kClusterFarProxy) proxy_error[o] = std::max(proxy_error[o], r.error);
+        else elsewhere[o] = true;
+      }
+    }
+    int picked_here = 0;
+    for (int p = 0; p < kWidth * kHeight && picked_here < 40; ++p) {
+      if (ids[p] == 0) continue;
+      const uint32_t object = ids[p] - 1;
+      if (proxy_error[object] < 0.0f || elsewhere[object]) continue;
+      const int x = p % kWidth, y = p / kWidth;
+      SCOPED_TRACE("pixel " + std::to_string(x) + "," + std::to_string(y));
+      const std::optional<Pick> pick = pickPixel(walk.renderer(), camera, x, y);
+      ASSERT_TRUE(pick);
+      EXPECT_EQ(pick->object, object);
+      const pkg::ObjectRecord& o = view.objects()[object];
+      const double slack = double(proxy_error[object]) + 0.01 * pick->distance_m;
+      for (int a = 0; a < 3; ++a) {
+        EXPECT_GE(pick->world[a], view.origin()[a] + o.aabb_min[a] - slack) << a;
+        EXPECT_LE(pick->world[a], view.origin()[a] + o.aabb_max[a] + slack) << a;
+      }
+      ++picked_here;
+    }
+    std::printf("%.1f diagonals away: %d pixels\n", away, picked_here);
+    proxy_pixels_picked += picked_here;
+  }
+  std::printf("%d pixels of objects drawn only by far proxies picked\n", proxy_pixels_picked);
+  EXPECT_GT(proxy_pixels_picked, 10) << "the far views should show far proxies";
 }
 
 TEST(Pick, NothingUnderThePixelAndBadPixels) {

@@ -135,6 +135,7 @@ nlohmann::json packageToJson(const PackageSummary& s) {
   j["max_cluster_triangles"] = s.max_cluster_triangles;
   j["clusters"] = s.clusters;
   j["groups"] = s.groups;
+  j["far_proxy"] = {{"clusters", s.far_proxy_clusters}, {"triangles", s.far_proxy_triangles}};
   j["bytes_per_input_triangle"] = s.bytesPerInputTriangle();
   nlohmann::json levels = nlohmann::json::array();
   for (const PackageLevelSummary& l : s.levels)
@@ -224,8 +225,10 @@ void printPackage(const PackageSummary& s, double seconds) {
               ull(s.total_triangles), ull(s.all_level_triangles),
               s.total_triangles ? double(s.all_level_triangles) / double(s.total_triangles) : 0.0,
               s.bytesPerInputTriangle());
-  std::printf("dag         %u levels, %llu clusters (largest %u triangles), %llu groups\n",
-              s.level_count, ull(s.clusters), s.max_cluster_triangles, ull(s.groups));
+  std::printf("dag         %u levels, %llu clusters (largest %u triangles), %llu groups; "
+              "%llu far-proxy clusters (%llu triangles)\n",
+              s.level_count, ull(s.clusters), s.max_cluster_triangles, ull(s.groups),
+              ull(s.far_proxy_clusters), ull(s.far_proxy_triangles));
   std::printf("  %5s %10s %14s %8s %8s %8s %12s %12s %12s %12s\n", "level", "clusters",
               "triangles", "param", "groups", "roots", "err min m", "err mean m", "err max m",
               "encoded");
