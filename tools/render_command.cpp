@@ -295,6 +295,8 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       // Mesh clusters and run-time parametric meshes together: what the frame rasterized.
       {"median_all_triangles",
        medianOf(all, [](const FrameStats& f) { return f.triangles_drawn + f.parametric_triangles; })},
+      {"median_xray_triangles",
+       medianOf(all, [](const FrameStats& f) { return f.xray_triangles; })},
       {"max_triangles",
        all.empty() ? 0 : std::max_element(all.begin(), all.end(), [](auto& a, auto& b) {
                            return a.triangles_drawn < b.triangles_drawn;
