@@ -14,6 +14,11 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The X-ray pass's parametrics: chordal tolerance this many times the frame's, and instances
+// smaller than this on screen left out (drawGhostLists).
+constexpr double kGhostToleranceFactor = 4.0;
+constexpr double kGhostMinFeaturePx = 3.0;
+
 double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
@@ -288,9 +293,15 @@ void Walkthrough::drawGhostLists(const glm::dvec3& eye, FrameStats* stats) {
     appendItems(ghost_mesh_, eye, ghost_items_);
     renderer_->setSurfacePass(SurfacePass::Xray);
     renderer_->draw(*pool_, ghost_items_);
+    // Ghosts are seen through at a fifth of their colour: coarser tessellations and no small
+    // instances cost little to the eye and much less to draw.
+    const ParametricView opaque_view = last_parametric_view_;
     last_parametric_view_.surface = SurfacePass::Xray;
+    last_parametric_view_.tolerance_px *= kGhostToleranceFactor;
+    last_parametric_view_.min_feature_px =
+        std::max(last_parametric_view_.min_feature_px, kGhostMinFeaturePx);
     drawParametrics(ghost_parametric_, stats);
-    last_parametric_view_.surface = SurfacePass::Opaque;
+    last_parametric_view_ = opaque_view;
     renderer_->setSurfacePass(SurfacePass::Opaque);
     if (stats)
       for (const DrawItem& item : ghost_items_) stats->xray_triangles += item.placement.triangle_count;

@@ -19,7 +19,7 @@ $tw gen plant --triangles "$triangles" --seed 1 -o "$out/plant.tws" --db "$out/p
   --mesh "$out/plant.ply" | tee "$out/gen.txt"
 $tw info "$out/plant.tws" | tee "$out/info.txt"
 $tw info --json "$out/plant.tws" > "$out/info.json"
-$tw preprocess "$out/plant.tws" -o "$out/plant.twk" | tee "$out/preprocess.txt"
+$tw preprocess "$out/plant.tws" -o "$out/plant.twk" --db "$out/plant.db" | tee "$out/preprocess.txt"
 $tw verify "$out/plant.twk" | tee "$out/verify.txt"
 $tw info "$out/plant.twk" | tee "$out/package.txt"
 # The walkthrough: LOD renders of the plant tour, every 8th path second, frames and statistics.
@@ -30,6 +30,12 @@ $tw snapshot "$out/plant.tws" --out "$out/plant-outside.png" --azimuth 210 --ele
 # A view from inside the first module's second storey (modules start at the site origin).
 $tw snapshot "$out/plant.tws" --out "$out/plant-inside.png" --eye 36,-16,13.7 --target 60,-10,13 \
   --fov 70 | tee -a "$out/snapshot.txt"
+
+# Review: a query over the project database the package names, and the sea-water lines it
+# finds selected among the plant with all but the water piping X-rayed.
+$tw find "$out/plant.twk" "service = ?1" --param 'sea water' --keys > "$out/sea-water.keys"
+$tw -q render "$out/plant.twk" --orbit 4 --size 1280x720 --isolate-layer "piping water" \
+  --xray-others --select "$out/sea-water.keys" --out "$out/review" --png | tee "$out/review.txt"
 
 # A quick run of the benchmark suite (small plants, every runtime mode, plots): out/bench/report.md.
 $tw -q bench --quick --out "$out/bench" --cache "$out/bench-cache" | tee "$out/bench.txt"
@@ -50,6 +56,10 @@ $tw -q bench --quick --out "$out/bench" --cache "$out/bench-cache" | tee "$out/b
   echo '```'; cat "$out/render.txt"; echo '```'
   echo; echo "![walk, frame 2](walk/frame_00002.png)"
   echo; echo "![walk, frame 14](walk/frame_00014.png)"
+  echo "## Review (terawalk find, render --xray-others --select)"; echo
+  echo "$(wc -l < "$out/sea-water.keys") sea-water line keys from the project database, selected"
+  echo "among the plant with all but the water piping X-rayed."; echo
+  echo "![review, frame 1](review/frame_00001.png)"
   echo "## Snapshot"; echo; echo '```'; cat "$out/snapshot.txt"; echo '```'
   echo; echo "![outside](plant-outside.png)"
   echo; echo "![inside a deck](plant-inside.png)"
