@@ -61,10 +61,7 @@ void ViewReview::setLayerHidden(uint32_t layer, bool hidden) {
 
 void ViewReview::isolateLayer(uint32_t layer) {
   if (layer >= layer_objects_.size()) return;
-  states_.setAll(kObjectXray, false);
-  states_.setAll(kObjectHidden, true);
-  for (uint32_t o : layer_objects_[layer]) states_.set(o, kObjectHidden, false);
-  recountLayers();
+  setAllBut(layer_objects_[layer], kObjectHidden);
   std::printf("view: layer '%s' isolated (%zu objects)\n",
               std::string(view_.layerName(layer)).c_str(), layer_objects_[layer].size());
   std::fflush(stdout);
@@ -72,13 +69,18 @@ void ViewReview::isolateLayer(uint32_t layer) {
 
 void ViewReview::xrayOthers(uint32_t layer) {
   if (layer >= layer_objects_.size()) return;
-  states_.setAll(kObjectHidden, false);
-  states_.setAll(kObjectXray, true);
-  for (uint32_t o : layer_objects_[layer]) states_.set(o, kObjectXray, false);
-  recountLayers();
+  setAllBut(layer_objects_[layer], kObjectXray);
   std::printf("view: layer '%s' opaque, the others X-rayed\n",
               std::string(view_.layerName(layer)).c_str());
   std::fflush(stdout);
+}
+
+// Every object but `objects` takes `bit` (hidden or X-ray); the other of the two is cleared.
+void ViewReview::setAllBut(const std::vector<uint32_t>& objects, uint32_t bit) {
+  states_.setAll(kObjectHidden | kObjectXray, false);
+  states_.setAll(bit, true);
+  for (uint32_t o : objects) states_.set(o, bit, false);
+  recountLayers();
 }
 
 void ViewReview::showAll() {
@@ -144,10 +146,7 @@ void ViewReview::selectResults() {
 }
 
 void ViewReview::isolateResults() {
-  states_.setAll(kObjectXray, false);
-  states_.setAll(kObjectHidden, true);
-  for (uint32_t o : results_) states_.set(o, kObjectHidden, false);
-  recountLayers();
+  setAllBut(results_, kObjectHidden);
   std::printf("view: isolated %zu objects\n", results_.size());
   std::fflush(stdout);
 }

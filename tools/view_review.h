@@ -61,6 +61,7 @@ class ViewReview {
 
  private:
   void recountLayers();
+  void setAllBut(const std::vector<uint32_t>& objects, uint32_t bit);
   void saveSet(SelectionSet set);
   std::vector<uint32_t> sceneIds(std::vector<uint32_t> objects) const;
   std::vector<uint32_t> objectsOf(const std::vector<uint32_t>& scene_ids) const;
