@@ -268,14 +268,16 @@ std::vector<std::vector<uint8_t>> renderedColors(const std::filesystem::path& di
 // equipment, the X-ray colour lies most of the way from the wall's colour to the equipment's
 // (as drawn with the rest hidden), short of it by the tint of the ghosts in front (each face at
 // GlRenderer::kXrayAlpha). Ghosts write no ids, so the X-ray ids hold equipment only.
-TEST(ObjectStates, XrayShowsWhatIsBehindAWall) {
-  const auto dir = test::scratchDir();
+// `mode`: how parametrics are drawn (--parametrics).
+void expectEquipmentThroughWalls(const std::filesystem::path& dir, const std::string& mode) {
+  SCOPED_TRACE(mode);
   const PackageView view = PackageView::open(test::generatedPlant().package);
   auto layer_of = [&](uint32_t o) { return std::string(view.layerName(view.objects()[o].layer)); };
   const std::string path = nearPath();
-  const auto shown = renderIds(dir, "shown", path, "");
-  const auto xray = renderIds(dir, "xray", path, "--isolate-layer equipment --xray-others");
-  const auto alone = renderIds(dir, "alone", path, "--isolate-layer equipment");
+  const std::string drawn = " --parametrics " + mode;
+  const auto shown = renderIds(dir, "shown", path, drawn);
+  const auto xray = renderIds(dir, "xray", path, "--isolate-layer equipment --xray-others" + drawn);
+  const auto alone = renderIds(dir, "alone", path, "--isolate-layer equipment" + drawn);
   const auto shown_rgba = renderedColors(dir, "shown");
   const auto xray_rgba = renderedColors(dir, "xray");
   const auto alone_rgba = renderedColors(dir, "alone");
@@ -305,11 +307,18 @@ TEST(ObjectStates, XrayShowsWhatIsBehindAWall) {
   ASSERT_GT(through, 200u) << "equipment should show through the walls";
   ASSERT_GT(length2, 0.0);
   const double share = along / length2;
-  std::printf("%llu pixels of equipment behind a wall: their X-ray colour lies %.2f of the way "
-              "from the wall's to the equipment's\n",
-              static_cast<unsigned long long>(through), share);
+  std::printf("%s: %llu pixels of equipment behind a wall: their X-ray colour lies %.2f of the "
+              "way from the wall's to the equipment's\n",
+              mode.c_str(), static_cast<unsigned long long>(through), share);
   EXPECT_GT(share, 0.4) << "what shows is the equipment, not the wall";
   EXPECT_LT(share, 0.97) << "the ghosts in front should tint what shows through";
+}
+
+// Both ways of drawing parametrics: tessellated (llvmpipe's default) and ray-cast impostors.
+TEST(ObjectStates, XrayShowsWhatIsBehindAWall) {
+  const auto dir = test::scratchDir();
+  expectEquipmentThroughWalls(dir, "tessellated");
+  expectEquipmentThroughWalls(dir, "impostor");
 }
 
 // The selection outline: pixels of the outline colour ring the selected objects, within two
