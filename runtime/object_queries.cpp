@@ -1,6 +1,7 @@
 // Objects by layer name and database key; see object_queries.h.
 #include "object_queries.h"
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -65,6 +66,19 @@ std::unordered_set<std::string> parseKeyList(const std::string& text) {
   }
   if (keys.empty()) throw std::runtime_error("no database keys in '" + text + "'");
   return keys;
+}
+
+bool objectsBounds(const PackageView& view, std::span<const uint32_t> objects, glm::dvec3& lo,
+                   glm::dvec3& hi) {
+  if (objects.empty()) return false;
+  lo = glm::dvec3(INFINITY);
+  hi = glm::dvec3(-INFINITY);
+  for (uint32_t o : objects) {
+    const pkg::ObjectRecord& r = view.objects()[o];
+    lo = glm::min(lo, view.origin() + glm::dvec3(r.aabb_min[0], r.aabb_min[1], r.aabb_min[2]));
+    hi = glm::max(hi, view.origin() + glm::dvec3(r.aabb_max[0], r.aabb_max[1], r.aabb_max[2]));
+  }
+  return true;
 }
 
 }  // namespace tw

@@ -343,7 +343,8 @@ TEST(ObjectStates, SelectedObjectsAreOutlined) {
   for (const std::string& path : {kFar, nearPath()}) {
     const auto ids = renderIds(dir, "selected", path, "--select " + key);
     const auto rgba = renderedColors(dir, "selected");
-    const auto plain_rgba = (renderIds(dir, "plain", path, ""), renderedColors(dir, "plain"));
+    renderIds(dir, "plain", path, "");
+    const auto plain_rgba = renderedColors(dir, "plain");
     ASSERT_EQ(rgba.size(), ids.size());
     auto outline = [](const std::vector<uint8_t>& image, size_t p) {
       return image[4 * p] == 255 && image[4 * p + 1] == 219 && image[4 * p + 2] == 0;

@@ -156,20 +156,7 @@ void ViewReview::zoomToResults() { zoom_requested_ = !results_.empty(); }
 bool ViewReview::takeZoomRequest(glm::dvec3& lo, glm::dvec3& hi) {
   if (!zoom_requested_) return false;
   zoom_requested_ = false;
-  return boundsOf(results_, lo, hi);
-}
-
-bool ViewReview::boundsOf(const std::vector<uint32_t>& objects, glm::dvec3& lo,
-                          glm::dvec3& hi) const {
-  if (objects.empty()) return false;
-  lo = glm::dvec3(INFINITY);
-  hi = glm::dvec3(-INFINITY);
-  for (uint32_t o : objects) {
-    const pkg::ObjectRecord& r = view_.objects()[o];
-    lo = glm::min(lo, view_.origin() + glm::dvec3(r.aabb_min[0], r.aabb_min[1], r.aabb_min[2]));
-    hi = glm::max(hi, view_.origin() + glm::dvec3(r.aabb_max[0], r.aabb_max[1], r.aabb_max[2]));
-  }
-  return true;
+  return objectsBounds(view_, results_, lo, hi);
 }
 
 std::vector<uint32_t> ViewReview::sceneIds(std::vector<uint32_t> objects) const {

@@ -66,7 +66,6 @@ class ViewReview {
   std::vector<uint32_t> sceneIds(std::vector<uint32_t> objects) const;
   std::vector<uint32_t> objectsOf(const std::vector<uint32_t>& scene_ids) const;
   std::vector<uint32_t> objectsWith(uint32_t bits) const;
-  bool boundsOf(const std::vector<uint32_t>& objects, glm::dvec3& lo, glm::dvec3& hi) const;
 
   const PackageView& view_;
   ObjectStates& states_;

@@ -7,6 +7,8 @@
 
 #include <imgui.h>
 
+#include "object_queries.h"
+
 namespace tw {
 
 ViewSelection::ViewSelection(const PackageView& view, ObjectStates& states,
@@ -57,16 +59,7 @@ void ViewSelection::clear() {
 }
 
 bool ViewSelection::bounds(glm::dvec3& lo, glm::dvec3& hi) const {
-  if (selected_.empty()) return false;
-  lo = glm::dvec3(INFINITY);
-  hi = glm::dvec3(-INFINITY);
-  const glm::dvec3 origin = view_.origin();
-  for (uint32_t o : selected_) {
-    const pkg::ObjectRecord& r = view_.objects()[o];
-    lo = glm::min(lo, origin + glm::dvec3(r.aabb_min[0], r.aabb_min[1], r.aabb_min[2]));
-    hi = glm::max(hi, origin + glm::dvec3(r.aabb_max[0], r.aabb_max[1], r.aabb_max[2]));
-  }
-  return true;
+  return objectsBounds(view_, selected_, lo, hi);
 }
 
 void ViewSelection::drawPanel(float x, float y) const {
