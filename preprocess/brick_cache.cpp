@@ -20,7 +20,7 @@ namespace tw {
 namespace {
 
 constexpr uint32_t kBlobMagic = 0x43425754u;  // "TWBC"
-constexpr uint32_t kBlobVersion = 1;
+constexpr uint32_t kBlobVersion = 2;  // 2: vertex-clustered groups (GroupMethod::Merged)
 
 struct BlobHeader {
   uint32_t magic, version, key, reserved;
@@ -137,7 +137,7 @@ void BrickCache::clear() {
 std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   ByteWriter w;
   w.put(uint32_t{0x53425754u});  // "TWBS"
-  w.put(uint32_t{2});  // 2: triangles_turned (bricks of 1 were built without turning)
+  w.put(uint32_t{3});  // 3: triangles_repeated (bricks of 2 kept repeated triangles)
   w.put(scene.origin);
   w.put(scene.max_brick_triangles);
   w.put(scene.grid);
@@ -155,6 +155,7 @@ std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   w.put(scene.parametric_count);
   w.put(scene.triangle_count);
   w.put(scene.triangles_turned);
+  w.put(scene.triangles_repeated);
   const BrickingStats& st = scene.stats;
   for (uint64_t v : {st.buffer_cap_bytes, st.peak_buffered_bytes, st.flushes,
                      st.spill_bytes_written, st.object_table_bytes})
@@ -168,7 +169,7 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
                                      const std::string& source) {
   ByteReader r(bytes, source);
   if (r.get<uint32_t>() != 0x53425754u) r.fail("not a bricked scene description (bad magic)");
-  if (r.get<uint32_t>() != 2) r.fail("unsupported bricked scene version");
+  if (r.get<uint32_t>() != 3) r.fail("unsupported bricked scene version");
   BrickedScene scene;
   scene.work_dir = work_dir;
   scene.origin = r.get<glm::dvec3>();
@@ -204,6 +205,7 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
   scene.triangle_count = r.get<uint64_t>();
   if (scene.triangle_count != sum) r.fail("triangle total differs from the sum over bricks");
   scene.triangles_turned = r.get<uint64_t>();
+  scene.triangles_repeated = r.get<uint64_t>();
   for (const std::string* f :
        {&scene.objects_file, &scene.object_bounds_file, &scene.parametrics_file})
     if (f->empty() || f->find('/') != std::string::npos || *f == "..")

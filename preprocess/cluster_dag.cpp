@@ -16,6 +16,8 @@
 #include "edge_counts.h"
 #include "far_proxy.h"
 #include "grid_weld.h"
+#include "locked_vertex_clustering.h"
+#include "repeated_triangles.h"
 #include "union_find.h"
 
 namespace tw {
@@ -27,22 +29,22 @@ static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "meshoptimizer reads packe
 constexpr uint32_t kUnowned = std::numeric_limits<uint32_t>::max();
 constexpr uint32_t kMulti = kUnowned - 1;  // vertex or edge used by more than one group
 
-struct Sphere {
+struct BoundSphere {
   glm::vec3 center{0.0f};
   float radius = 0.0f;
 };
 
 // A sphere enclosing spheres: centred on their bounding box, radius to the farthest one.
-Sphere enclose(const std::vector<Sphere>& spheres) {
+BoundSphere enclose(const std::vector<BoundSphere>& spheres) {
   if (spheres.empty()) return {};
   glm::vec3 lo(INFINITY), hi(-INFINITY);
-  for (const Sphere& s : spheres) {
+  for (const BoundSphere& s : spheres) {
     lo = glm::min(lo, s.center - glm::vec3(s.radius));
     hi = glm::max(hi, s.center + glm::vec3(s.radius));
   }
-  Sphere out;
+  BoundSphere out;
   out.center = 0.5f * (lo + hi);
-  for (const Sphere& s : spheres)
+  for (const BoundSphere& s : spheres)
     out.radius = std::max(out.radius, glm::length(s.center - out.center) + s.radius);
   out.radius *= 1.0f + 1e-6f;  // float rounding must not make a child poke out
   return out;
@@ -146,6 +148,7 @@ struct GroupOutcome {
   GroupMethod method = GroupMethod::PassThrough;
   uint64_t triangles = 0;
   bool locked_rejected = false;
+  bool merged_rejected = false;
   bool sloppy_rejected = false;
   bool proxy_rejected = false;
   bool proxy_skipped = false;  // dropping was sure to win: no proxy built
@@ -158,6 +161,10 @@ struct GroupOutcome {
 // A far proxy's voxel comes out at least this fraction of predictFarProxyVoxel's (one retry
 // refines by at most 0.7x), and its measured error is at least about iso_voxels voxels.
 constexpr float kProxyVoxelFloor = 0.7f;
+
+// A locked result with an error above this fraction of its group's extent is weighed against
+// vertex clustering (well simplified groups stay near 1e-3).
+constexpr float kMergeTrialError = 0.01f;
 
 struct Candidate {
   std::vector<uint32_t> tris;  // local vertex indices; vcount + j is extra[j]
@@ -276,7 +283,37 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     }
   }
 
-  // 2. Not enough: topology-free simplification, only on free components.
+  // 2. Vertex clustering of the whole group with its border held (every vertex shared with
+  // another group or on a locked seam; the rims of unbalanced edges merge only among themselves).
+  // Tried when the locked result falls short, or reaches the target only with an error above
+  // kMergeTrialError of the group's extent (meshopt then collapsed whole features, which the
+  // clustering may do with less); of two results that both reach the target, the smaller error
+  // wins.
+  const bool locked_fits = best.tris.size() / 3 <= limit;
+  if ((!locked_fits || best.error > kMergeTrialError * scale) && options.allow_merge) {
+    std::vector<uint8_t> roles(vcount, kFreeVertex);
+    for (uint32_t v = 0; v < vcount; ++v)
+      if (isPinned(v)) roles[v] = kLockedVertex;
+    markRimVertices(ltris, roles);
+    VertexClusteringResult merged = simplifyByLockedVertexClustering(lpos, ltris, roles, n / 2);
+    std::vector<uint8_t> locked(vcount);
+    for (uint32_t v = 0; v < vcount; ++v) locked[v] = (roles[v] & kLockedVertex) != 0;
+    if (merged.tris.size() < best.tris.size() && !merged.tris.empty()) {
+      if (borderPreserved(in, shared, merged.tris, vcount, &locked)) {
+        std::vector<uint32_t> ids(merged.source_triangle.size());
+        for (size_t t = 0; t < ids.size(); ++t) ids[t] = gids[merged.source_triangle[t]];
+        Candidate c{std::move(merged.tris), std::move(ids), merged.error, GroupMethod::Merged, {}};
+        if (!locked_fits && c.tris.size() / 3 <= limit)
+          consider(std::move(c));
+        else if (c.tris.size() / 3 <= limit && c.error < best.error)
+          best = std::move(c);
+      } else {
+        outcome.merged_rejected = true;
+      }
+    }
+  }
+
+  // 3. Still not enough: topology-free simplification, only on free components.
   if (best.tris.size() / 3 > limit && (options.allow_sloppy || options.allow_drop)) {
     UnionFind components(vcount);
     for (size_t i = 0; i < ltris.size(); i += 3) {
@@ -480,7 +517,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     }
   }
 
-  // 3. Cut the result into clusters again.
+  // 4. Cut the result into clusters again.
   outcome.error = best.error;
   outcome.method = best.method;
   outcome.triangles = best.tris.size() / 3;
@@ -588,6 +625,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
     tris.insert(tris.end(), {a, b, c});
     ids.push_back(input.triangle_object_ids[t]);
   }
+  dag.stats.repeated_triangles = dropRepeatedTriangles(tris, ids);
   if (tris.empty()) return dag;
   // Strict monotonicity margin: far below any visible error, far above float rounding.
   const float epsilon = std::max(glm::length(hi - lo) * 1e-6f, 1e-12f);
@@ -707,7 +745,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       cluster_tris.push_back(wc.tris);
       cluster_ids.push_back(wc.ids);
     }
-    for (uint64_t group_size = options.group_size;; group_size *= 2) {
+    for (uint64_t group_size = options.group_size;; group_size *= 4) {
       // Large objects are grouped apart, except in a last attempt with the whole level as one
       // group (which ends the retries).
       const uint32_t size = uint32_t(std::min<uint64_t>(group_size, current_work.size()));
@@ -811,7 +849,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       DagGroup group;
       group.method = o.method;
       float max_child_error = 0.0f;
-      std::vector<Sphere> spheres;
+      std::vector<BoundSphere> spheres;
       for (uint32_t m : groups[g]) {
         const DagCluster& child = dag.clusters[current_ids[m]];
         group.children.push_back(current_ids[m]);
@@ -844,7 +882,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         made.push_back(makeCluster(*all_positions, wc.tris, wc.ids, slot));
         spheres.push_back({made.back().sphere_center, made.back().sphere_radius});
       }
-      Sphere bound = enclose(spheres);
+      BoundSphere bound = enclose(spheres);
       group.sphere_center = bound.center;
       group.sphere_radius = bound.radius;
       for (uint32_t child : group.children) {
@@ -872,7 +910,9 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         case GroupMethod::Dropped: ++dag.stats.groups_dropped; break;
         case GroupMethod::PassThrough: ++dag.stats.groups_pass_through; break;
         case GroupMethod::Proxy: ++dag.stats.groups_proxy; break;
+        case GroupMethod::Merged: ++dag.stats.groups_merged; break;
       }
+      dag.stats.merged_results_rejected += o.merged_rejected;
       dag.stats.proxy_results_rejected += o.proxy_rejected;
       dag.stats.proxies_skipped += o.proxy_skipped;
       dag.stats.locked_results_rejected += o.locked_rejected;

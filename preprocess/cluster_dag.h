@@ -6,13 +6,21 @@
 // Build, level by level (pure function over buffers; per-group work runs in parallel with TBB and
 // the result does not depend on thread timing):
 //  1. Weld vertices by exact position (simplification only sees positions), drop degenerate
-//     triangles, cut into clusters of at most cluster_size triangles (clusterize.h).
+//     triangles and exact repeats of a triangle (stats.repeated_triangles), cut into clusters of
+//     at most cluster_size triangles (clusterize.h).
 //  2. Group the level's clusters with METIS_PartGraphKway on the cluster adjacency graph (edge
 //     weight = shared vertices; weak extra edges between clusters neighbouring in Morton order
 //     keep disconnected CAD parts grouped by proximity). A level of <= group_size clusters is
 //     one group (METIS is not called).
 //  3. Simplify each group to half its triangles with meshopt_simplify + meshopt_SimplifyLockBorder.
-//     If that does not reach min_shrink_ratio, the fallback works only on the group's *free*
+//     If that does not reach min_shrink_ratio, or reaches it only with an error above 1% of the
+//     group's extent, vertex clustering of the whole group with its border held
+//     (locked_vertex_clustering.h: vertices shared with another group and locked seams never
+//     move, the rims of the parts' own open edges merge only among themselves; error: the largest
+//     vertex displacement) is tried, and taken when it reaches min_shrink_ratio (with less error,
+//     when the locked result reached it too). This is what halves groups of many small parts,
+//     thin pipes and open sheets, which LockBorder cannot touch (it locks every open edge, the
+//     parts' own included). If neither reaches it, the fallback works only on the group's *free*
 //     components (connected components that share no vertex with another group, so nothing
 //     outside the group can crack against them): first meshopt_simplifySloppy on them (given only
 //     their vertices, so its output cannot reach the border part), then, if that is rejected or
@@ -28,8 +36,9 @@
 //     is the group unchanged. So a cut never shows a boundary edge the input did not have. (The
 //     check matters: on non-manifold input, or inside sloppy output, meshopt_simplify sees an
 //     edge shared 2 + 2 between groups as interior and collapses it.)
-//  5. If the whole level does not shrink to min_shrink_ratio, it is redone with groups twice as
-//     large (fewer locked borders), up to one group for the level, where every component is free.
+//  5. If the whole level does not shrink to min_shrink_ratio, it is redone with groups four times
+//     as large (fewer locked borders), up to one group for the level, where every component is
+//     free.
 //  6. Stop at one cluster, or when a level cannot shrink and holds <= max_root_triangles. A level
 //     above max_root_triangles that shrinks less than asked is kept (stats.levels_below_shrink);
 //     one that cannot shrink at all ends the build with stats.root_within_limit = false.
@@ -48,7 +57,8 @@
 //
 // Object ids: a simplified triangle takes the majority id of its three vertices, where a vertex's
 // id is the most frequent id among the group's input triangles that use it (ties: smaller id).
-// Triangles kept unchanged (pass-through, kept free components) keep their own id. Far-proxy
+// Triangles kept unchanged (pass-through, kept free components) and those vertex clustering
+// moved keep their own (source triangle's) id. Far-proxy
 // triangles take the id of the source triangle nearest their centroid.
 //
 // Limitations: (a) components touching another group at a single vertex (no shared edge, e.g. two
@@ -61,6 +71,7 @@
 // fold into double-sided sheets (edges with four triangles): still no boundary edge.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <limits>
@@ -85,6 +96,7 @@ struct DagOptions {
   float min_shrink_ratio = 0.6f;     // a group or level "shrinks" when output <= ratio * input
   uint32_t max_root_triangles = 65536;
   float max_relative_error = 1.0f;   // meshopt target_error, relative to a group's extent
+  bool allow_merge = true;           // vertex clustering of whole groups, border held
   bool allow_sloppy = true;          // meshopt_simplifySloppy on free components
   bool allow_drop = true;            // drop whole free components, smallest first
   // OpenVDB far proxy (far_proxy.h) of a group's free components when there are at least
@@ -154,7 +166,11 @@ enum class GroupMethod : uint8_t {
   Dropped = 2,      // locked on the border part, smallest free components removed
   PassThrough = 3,  // nothing acceptable: the group's triangles unchanged
   Proxy = 4,        // locked on the border part, OpenVDB far proxy of the free components
+  Merged = 5,       // vertex clustering of the whole group, border held (locked_vertex_clustering.h)
 };
+
+// Groups per GroupMethod, indexed by its value.
+using GroupMethodCounts = std::array<uint64_t, 6>;
 
 struct DagGroup {
   uint32_t level = 0;               // highest level of its children (equal in a single build;
@@ -170,6 +186,7 @@ struct DagGroup {
 struct DagBuildStats {
   uint64_t input_triangles = 0;
   uint64_t skipped_triangles = 0;   // degenerate after welding, or non-finite positions
+  uint64_t repeated_triangles = 0;  // exact copies of an earlier triangle, removed
   uint64_t grid_welded_vertices = 0;  // merged by the package-grid weld (position_step_m)
   uint32_t groups_locked = 0;
   uint32_t groups_sloppy = 0;
@@ -178,6 +195,8 @@ struct DagBuildStats {
   uint32_t locked_results_rejected = 0;  // locked simplify output failed the border check
   uint32_t sloppy_results_rejected = 0;  // sloppy output failed the boundary check
   uint32_t groups_proxy = 0;
+  uint32_t groups_merged = 0;
+  uint32_t merged_results_rejected = 0;  // vertex clustering output failed the border check
   uint32_t proxy_results_rejected = 0;   // proxy output failed the boundary check
   uint32_t proxies_skipped = 0;  // not built: dropping reached the target with far less error
   uint32_t level_retries = 0;            // levels redone with larger groups

@@ -51,6 +51,52 @@ struct Splitter {
   }
 };
 
+// Median bisection of one point per triangle.
+TriangleClusters splitPoints(const std::vector<glm::vec3>& points, uint32_t max_triangles) {
+  TriangleClusters result;
+  result.triangles.resize(points.size());
+  std::iota(result.triangles.begin(), result.triangles.end(), 0u);
+  if (points.empty()) return result;
+  result.offsets.reserve(points.size() / max_triangles + 2);
+  result.offsets.push_back(0);
+  Splitter splitter{points, result.triangles, result.offsets, max_triangles};
+  splitter.split(0, points.size());
+  return result;
+}
+
+// The small objects' set: each triangle sorted by its object's centre, pulled a millionth of the
+// way toward its own centroid (so an object's triangles stay in spatial order among themselves).
+// A split then cuts through at most one object, where sorting by triangle centroid cut through
+// every part it crossed: a part whose triangles sit in two groups has every vertex on a group
+// border and cannot simplify (the KiCad connector's groups were locked that way).
+TriangleClusters clusterizeSmallObjects(std::span<const glm::vec3> positions,
+                                        std::span<const uint32_t> indices,
+                                        std::span<const uint32_t> objects,
+                                        uint32_t max_triangles) {
+  const size_t triangle_count = indices.size() / 3;
+  std::vector<glm::vec3> centroids(triangle_count);
+  std::unordered_map<uint32_t, std::pair<glm::vec3, glm::vec3>> bounds;
+  for (size_t t = 0; t < triangle_count; ++t) {
+    glm::vec3 sum(0.0f);
+    for (int k = 0; k < 3; ++k) sum += positions[indices[3 * t + k]];
+    glm::vec3 c = sum / 3.0f;
+    for (int a = 0; a < 3; ++a)
+      if (!std::isfinite(c[a])) c[a] = 0.0f;
+    centroids[t] = c;
+    auto [it, fresh] = bounds.try_emplace(objects[t], c, c);
+    if (!fresh) {
+      it->second.first = glm::min(it->second.first, c);
+      it->second.second = glm::max(it->second.second, c);
+    }
+  }
+  for (size_t t = 0; t < triangle_count; ++t) {
+    const auto& [lo, hi] = bounds[objects[t]];
+    const glm::vec3 centre = 0.5f * (lo + hi);
+    centroids[t] = centre + 1e-6f * (centroids[t] - centre);
+  }
+  return splitPoints(centroids, max_triangles);
+}
+
 }  // namespace
 
 TriangleClusters clusterizeTriangles(std::span<const glm::vec3> positions,
@@ -76,15 +122,7 @@ TriangleClusters clusterizeTriangles(std::span<const glm::vec3> positions,
     centroids[t] = c;
   }
 
-  TriangleClusters result;
-  result.triangles.resize(triangle_count);
-  std::iota(result.triangles.begin(), result.triangles.end(), 0u);
-  if (triangle_count == 0) return result;
-  result.offsets.reserve(triangle_count / max_triangles + 2);
-  result.offsets.push_back(0);
-  Splitter splitter{centroids, result.triangles, result.offsets, max_triangles};
-  splitter.split(0, triangle_count);
-  return result;
+  return splitPoints(centroids, max_triangles);
 }
 
 TriangleClusters clusterizeTrianglesByObject(std::span<const glm::vec3> positions,
@@ -102,17 +140,24 @@ TriangleClusters clusterizeTrianglesByObject(std::span<const glm::vec3> position
   const std::vector<std::vector<uint32_t>> sets = setsByLargeObject(
       triangle_count, [&](size_t t) { return triangle_objects[t]; },
       [&](uint32_t object) { return per_object[object] >= large; });
-  if (sets.size() <= 1) return clusterizeTriangles(positions, indices, max_triangles);
+  if (sets.empty() || (sets.size() == 1 && per_object[triangle_objects[0]] >= large))
+    return clusterizeTriangles(positions, indices, max_triangles);
 
   TriangleClusters result;
   result.triangles.reserve(triangle_count);
   result.offsets.push_back(0);
-  std::vector<uint32_t> set_indices;
+  std::vector<uint32_t> set_indices, set_objects;
   for (const std::vector<uint32_t>& set : sets) {
     set_indices.clear();
-    for (uint32_t t : set)
+    set_objects.clear();
+    for (uint32_t t : set) {
       set_indices.insert(set_indices.end(), indices.begin() + 3 * t, indices.begin() + 3 * t + 3);
-    TriangleClusters part = clusterizeTriangles(positions, set_indices, max_triangles);
+      set_objects.push_back(triangle_objects[t]);
+    }
+    const bool small_objects = per_object[set_objects.front()] < large;
+    TriangleClusters part =
+        small_objects ? clusterizeSmallObjects(positions, set_indices, set_objects, max_triangles)
+                      : clusterizeTriangles(positions, set_indices, max_triangles);
     for (size_t c = 0; c < part.clusterCount(); ++c) {
       for (uint32_t i = part.offsets[c]; i < part.offsets[c + 1]; ++i)
         result.triangles.push_back(set[part.triangles[i]]);

@@ -95,6 +95,7 @@ ClusterDag deserializeClusterDag(std::span<const uint8_t> bytes, const std::stri
     g.sphere_center = r.get<glm::vec3>();
     g.sphere_radius = r.get<float>();
     g.method = r.get<GroupMethod>();
+    if (uint8_t(g.method) > uint8_t(GroupMethod::Merged)) r.fail("unknown group method");
     for (uint32_t i : g.children)
       if (i >= clusters) r.fail("group child out of range");
     for (uint32_t i : g.clusters)

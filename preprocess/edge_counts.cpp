@@ -83,17 +83,30 @@ bool containsSorted(const std::vector<uint64_t>& sorted, uint64_t e) {
 }
 
 bool borderPreserved(const EdgeCounts& in, const std::vector<uint64_t>& shared,
-                     const std::vector<uint32_t>& out_tris, size_t vertex_count) {
+                     const std::vector<uint32_t>& out_tris, size_t vertex_count,
+                     const std::vector<uint8_t>* locked) {
   std::vector<uint64_t>& keys = edgeScratch().keys;
   sortedEdgeKeys(out_tris, vertex_count, keys);
   for (uint64_t e : shared) {
     auto [lo, hi] = std::equal_range(keys.begin(), keys.end(), e);
     if (uint32_t(hi - lo) != edgeCount(in, e)) return false;
   }
+  std::vector<uint8_t> on_rim;
+  if (locked) {
+    on_rim.assign(vertex_count, 0);
+    for (const EdgeCount& ec : in)
+      if (ec.count != 2) on_rim[uint32_t(ec.key >> 32)] = on_rim[uint32_t(ec.key)] = 1;
+  }
+  auto rimOutline = [&](uint64_t e) {
+    if (!locked) return false;
+    const uint32_t a = uint32_t(e >> 32), b = uint32_t(e);
+    if (a >= vertex_count || b >= vertex_count) return false;  // a far proxy's new vertex
+    return on_rim[a] && on_rim[b] && !((*locked)[a] && (*locked)[b]);
+  };
   for (size_t i = 0; i < keys.size();) {
     size_t j = i + 1;
     while (j < keys.size() && keys[j] == keys[i]) ++j;
-    if (j - i == 1 && edgeCount(in, keys[i]) != 1) return false;
+    if (j - i == 1 && edgeCount(in, keys[i]) != 1 && !rimOutline(keys[i])) return false;
     i = j;
   }
   return true;

@@ -50,7 +50,15 @@ bool containsSorted(const std::vector<uint64_t>& sorted, uint64_t e);
 // the time (an interior vertex collapsing onto the border), so forbidding them stalls
 // simplification. Where a neighbour joins the same two vertices on its side, a cut holds a pinch:
 // an edge with four triangles (two opposite slivers), closed but not manifold. No hole appears.
+//
+// With `locked` (one flag per vertex: never moves), an edge used once that `in` did not use once
+// is also accepted when both its vertices lie on rim edges of `in` (used other than exactly
+// twice) and not both are locked: the outline of a part's own opening, simplified (a strip
+// between two rims may narrow to nothing; the shared edges keep their counts, so the
+// neighbouring groups' side is intact). Outlines then only ever join vertices that were on a
+// rim of the input, level after level (docs/preprocess.md, "Rims").
 bool borderPreserved(const EdgeCounts& in, const std::vector<uint64_t>& shared,
-                     const std::vector<uint32_t>& out_tris, size_t vertex_count);
+                     const std::vector<uint32_t>& out_tris, size_t vertex_count,
+                     const std::vector<uint8_t>* locked = nullptr);
 
 }  // namespace tw

@@ -136,6 +136,11 @@ void addLevels(std::vector<uint64_t>& triangles_per_level, const ClusterDag& dag
   }
 }
 
+// Adds the groups of `groups` to the per-method counts (index: GroupMethod).
+void addGroupMethods(GroupMethodCounts& counts, const std::vector<DagGroup>& groups) {
+  for (const DagGroup& g : groups) ++counts[size_t(g.method)];
+}
+
 // Builds the visibility section of the package at `path` and stores it there.
 VisibilitySummary addVisibility(const std::filesystem::path& path,
                                 const PreprocessOptions& options) {
@@ -275,10 +280,11 @@ void PreprocessRun::brickInputs() {
     storeBrickedScene(cache_, scene_);
   }
   throwIfCancelled(progress_);
-  report_.input_triangles = scene_.triangle_count;
+  report_.input_triangles = scene_.triangle_count + scene_.triangles_repeated;
   report_.primitives = scene_.parametric_count;
   report_.objects = scene_.object_count;
   report_.triangles_turned = scene_.triangles_turned;
+  report_.triangles_repeated = scene_.triangles_repeated;
   report_.bricks = static_cast<uint32_t>(scene_.bricks.size());
 }
 
@@ -342,6 +348,7 @@ void PreprocessRun::buildBricks() {
         report_.merge_front_triangles += dag.clusters[c].triangleCount();
       }
     addLevels(report_.triangles_per_level, dag);
+    addGroupMethods(report_.groups_by_method, dag.groups);
     // Only the last brick may stay: earlier ones would sit beside every later brick build, which
     // is where the peak is. A one-brick model is then never read back (nor welded twice).
     const bool keep = b + 1 == scene_.bricks.size() && dag_bytes <= resident_limit;
@@ -382,6 +389,7 @@ void PreprocessRun::mergeUpperLevels() {
     appendMergedLevels(merged, root_global, uint32_t(total_clusters_), uint32_t(total_groups_),
                        upper_.clusters, upper_.groups);
     addLevels(report_.triangles_per_level, upper_);
+    addGroupMethods(report_.groups_by_method, upper_.groups);
   }
   if (total_clusters_ + upper_.clusters.size() >= pkg::kNone ||
       total_groups_ + upper_.groups.size() >= pkg::kNone)

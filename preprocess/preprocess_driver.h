@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "cluster_dag.h"
 #include "progress.h"
 
 namespace tw {
@@ -88,6 +89,8 @@ struct PreprocessReport {
   uint64_t parametric_clusters = 0;
   uint32_t parametric_sort_runs = 0;  // sorted runs the parametric clustering spilled (0: in memory)
   uint64_t triangles_turned = 0;      // mesh triangles reversed to agree with their piece
+  uint64_t triangles_repeated = 0;    // exact copies of another triangle, dropped
+  GroupMethodCounts groups_by_method{};  // DAG groups by how they were simplified
   uint64_t sealed_run_members = 0;    // instances marked as open parts of sealed pipe runs
   uint64_t sealed_run_closers = 0;    // and as the capped cylinders closing them
   uint64_t covered_box_faces = 0;     // box faces marked as covered by another box's face

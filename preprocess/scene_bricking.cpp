@@ -18,6 +18,7 @@
 #include "byte_packing.h"
 #include "closed_surface.h"
 #include "consistent_winding.h"
+#include "repeated_triangles.h"
 #include "file_reader.h"
 #include "format_error.h"
 #include "nurbs_conforming.h"
@@ -123,11 +124,13 @@ class SpillReader {
     if (header.kind != static_cast<uint32_t>(kind))
       reader_.failAt(8, "spill file of kind " + std::to_string(header.kind) + ", expected " +
                             std::to_string(static_cast<uint32_t>(kind)));
+    if (header.reserved != 0) reader_.failAt(12, "reserved header field is not zero");
     const uint64_t trailer_at = reader_.size() - sizeof(SpillTrailer);
     reader_.seek(trailer_at);
     trailer_ = reader_.readValue<SpillTrailer>();
     if (trailer_.magic != kTrailerMagic)
       reader_.failAt(trailer_at, "missing trailer (truncated or unfinished spill file)");
+    if (trailer_.reserved != 0) reader_.failAt(trailer_at + 4, "reserved trailer field is not zero");
     if (trailer_.content_bytes != trailer_at - sizeof(SpillHeader))
       reader_.failAt(trailer_at, "trailer says " + std::to_string(trailer_.content_bytes) +
                                      " content bytes, file holds " +
@@ -431,9 +434,16 @@ class BrickingSink : public SceneSink {
     object_bounds_[dense].max = glm::max(object_bounds_[dense].max, p);
   }
 
-  void addMesh(const TriangleMesh& input, const Transform& t, uint32_t dense) {
-    // Triangles wound against their neighbours are turned first, so that edge collapse can
-    // coarsen the piece and a closed piece can count as a solid (consistent_winding.h).
+  void addMesh(const TriangleMesh& original, const Transform& t, uint32_t dense) {
+    // Exact repeats of a triangle go first (repeated_triangles.h); then triangles wound against
+    // their neighbours are turned, so that edge collapse can coarsen the piece and a closed
+    // piece can count as a solid (consistent_winding.h).
+    const std::vector<uint32_t> repeats = repeatedTriangles(original);
+    if (!repeats.empty()) {
+      unrepeated_mesh_ = withoutTriangles(original, repeats);
+      scene_.triangles_repeated += repeats.size();
+    }
+    const TriangleMesh& input = repeats.empty() ? original : unrepeated_mesh_;
     const std::vector<uint32_t> turn = trianglesToTurn(input);
     if (!turn.empty()) {
       turned_mesh_ = input;
@@ -540,6 +550,7 @@ class BrickingSink : public SceneSink {
   uint32_t last_id_ = 0, last_dense_ = 0;
   std::vector<glm::dvec3> relative_;
   TriangleMesh turned_mesh_;  // addMesh: the input with some triangles reversed
+  TriangleMesh unrepeated_mesh_;  // addMesh: the input without its repeated triangles
 };
 
 // Splits an over-full brick file into two by streaming it: halves its centroid bounds along the

@@ -113,6 +113,7 @@ struct BrickedScene {
   uint64_t parametric_count = 0;
   uint64_t triangle_count = 0;  // sum over bricks
   uint64_t triangles_turned = 0;  // wound against their piece, reversed (consistent_winding.h)
+  uint64_t triangles_repeated = 0;  // exact copies of another, dropped (repeated_triangles.h)
   BrickingStats stats;
 };
 

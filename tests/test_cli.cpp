@@ -301,6 +301,40 @@ TEST(Cli, PreprocessVerifyAndInfoOnTheKicadConnector) {
   EXPECT_LE(j["bytes_per_input_triangle"].get<double>(), 24.0);
 }
 
+// A real MEP model (926 pipes, ducts and fittings; a third of its triangles exact copies): its
+// DAG halves level after level down to one root cluster, and verify says so, in text and JSON.
+TEST(Cli, VerifyReportsThatARealMepModelHalvesToOneRoot) {
+  auto file = test::sharedDataDir() / "duplex-mep.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto twk = test::scratchDir() / "duplex.twk";
+  RunResult pre = run("preprocess " + file.string() + " -o " + twk.string());
+  ASSERT_EQ(pre.exit_code, 0) << pre.output;
+  EXPECT_NE(pre.output.find("input       335822 triangles"), std::string::npos) << pre.output;
+  EXPECT_NE(pre.output.find("repeats     113484 mesh triangles"), std::string::npos) << pre.output;
+  RunResult text = run("verify --quiet " + twk.string());
+  ASSERT_EQ(text.exit_code, 0) << text.output;
+  EXPECT_NE(text.output.find("every level above 1000 triangles halves"), std::string::npos)
+      << text.output;
+  EXPECT_NE(text.output.find("; root 1 cluster\n"), std::string::npos) << text.output;
+  RunResult json = run("verify --quiet --json " + twk.string());
+  ASSERT_EQ(json.exit_code, 0) << json.output;
+  const nlohmann::json j = nlohmann::json::parse(json.output);
+  const nlohmann::json& dag = j["dag"];
+  EXPECT_TRUE(dag["halves"].get<bool>());
+  EXPECT_TRUE(dag["errors_monotone"].get<bool>());
+  EXPECT_EQ(dag["root_clusters"], 1);
+  const nlohmann::json& levels = dag["levels"];
+  ASSERT_GE(levels.size(), 8u);
+  for (size_t l = 1; l < levels.size(); ++l) {
+    const double below = levels[l - 1]["triangles"].get<double>();
+    const double ratio = levels[l]["triangles"].get<double>() / below;
+    EXPECT_NEAR(levels[l]["ratio"].get<double>(), ratio, 1e-9);
+    if (below <= 1000) continue;
+    EXPECT_GE(ratio, 0.3) << "level " << l;
+    EXPECT_LE(ratio, 0.65) << "level " << l;
+  }
+}
+
 }  // namespace
 }  // namespace tw
 

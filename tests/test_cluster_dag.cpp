@@ -204,7 +204,11 @@ uint64_t edgeKey(uint32_t a, uint32_t b) {
 
 struct EdgeCensus {
   std::unordered_set<uint64_t> boundary;  // welded edges used by exactly one triangle
+  std::unordered_set<uint32_t> rim;       // welded vertices of edges not used exactly twice
   size_t overused = 0;                    // welded edges used by more than two triangles
+
+  // A boundary edge that outlines an opening of this mesh anew (both ends on its rims).
+  bool outlinesRim(uint64_t e) const { return rim.count(uint32_t(e >> 32)) && rim.count(uint32_t(e)); }
 };
 
 template <typename ForEachTriangle>
@@ -220,6 +224,7 @@ EdgeCensus countEdges(Welder& welder, ForEachTriangle&& for_each) {
   EdgeCensus census;
   for (const auto& [e, n] : counts) {
     if (n == 1) census.boundary.insert(e);
+    if (n != 2) census.rim.insert({uint32_t(e >> 32), uint32_t(e)});
     census.overused += n > 2;
   }
   return census;
@@ -254,8 +259,10 @@ std::vector<float> thresholds(const ClusterDag& dag, int steps = 30) {
   return taus;
 }
 
-// Every cut: non-empty, and its boundary edges are input boundary edges. Returns how many cuts
-// had exactly the input's boundary; `overused` gets the most over-used edges (more than two
+// Every cut: non-empty, and its boundary edges are input boundary edges or outline the input's
+// openings anew (both ends on the input's rims: the rims of a part's own openings simplify, see
+// cluster_dag.h). Returns how many cuts had exactly the input's boundary; `overused` gets the
+// most over-used edges (more than two
 // triangles) any cut had beyond the input's own.
 // With check_area, each cut's area must stay close to the input's: a cut that drew a region twice
 // (a cluster and its replacement) or not at all would fail it.
@@ -277,8 +284,8 @@ int expectCrackFreeCuts(const ClusterDag& dag, const Mesh& mesh, size_t* overuse
     EXPECT_FALSE(cut.empty()) << "tau " << tau;
     EdgeCensus census = cutEdges(welder, dag, cut);
     size_t foreign = 0;
-    for (uint64_t e : census.boundary) foreign += !input.boundary.count(e);
-    EXPECT_EQ(foreign, 0u) << "tau " << tau << ": boundary edges the input does not have";
+    for (uint64_t e : census.boundary) foreign += !input.boundary.count(e) && !input.outlinesRim(e);
+    EXPECT_EQ(foreign, 0u) << "tau " << tau << ": boundary edges off the input's rims";
     exact += census.boundary.size() == input.boundary.size();
     if (check_area) {
       double cut_area = 0.0;
@@ -547,7 +554,8 @@ TEST(ClusterDag, CadLikeDisconnectedBoxesStillShrink) {
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
   reportDag("2000 boxes", dag, -1.0);
   expectWellFormed(dag, options, m.triangles());
-  EXPECT_GT(dag.stats.groups_sloppy + dag.stats.groups_dropped, 0u);
+  // Clusters keep small parts whole (clusterize.h), so locked simplification may collapse whole
+  // boxes; whichever path does it, the DAG must reach one cluster.
   EXPECT_EQ(dag.clusters_per_level.back(), 1u);
   expectCrackFreeCuts(dag, m);
   std::set<uint32_t> input_ids(m.ids.begin(), m.ids.end());
@@ -555,26 +563,86 @@ TEST(ClusterDag, CadLikeDisconnectedBoxesStillShrink) {
     for (uint32_t id : c.triangle_object_ids) ASSERT_TRUE(input_ids.count(id));
 }
 
-TEST(ClusterDag, SloppyFallbackAloneKeepsBoxesClosed) {
-  Mesh m = scatteredBoxes(2000, 11);
+// A closed cylinder (capped tube) of `sides` segments: 4 * sides triangles.
+void appendCylinder(Mesh& m, glm::vec3 base, float radius, float length, int axis, uint32_t sides,
+                    uint32_t id) {
+  const uint32_t first = uint32_t(m.positions.size());
+  auto place = [&](glm::vec3 p) {
+    if (axis == 1) p = {p.z, p.x, p.y};
+    if (axis == 2) p = {p.y, p.z, p.x};
+    return base + p;
+  };
+  for (uint32_t end = 0; end < 2; ++end)
+    for (uint32_t s = 0; s < sides; ++s) {
+      const float a = 6.2831853f * float(s) / float(sides);
+      m.positions.push_back(place({radius * std::cos(a), radius * std::sin(a), float(end) * length}));
+    }
+  const uint32_t bottom = uint32_t(m.positions.size()), top = bottom + 1;
+  m.positions.push_back(place({0.0f, 0.0f, 0.0f}));
+  m.positions.push_back(place({0.0f, 0.0f, length}));
+  for (uint32_t s = 0; s < sides; ++s) {
+    const uint32_t a = first + s, b = first + (s + 1) % sides, c = a + sides, d = b + sides;
+    m.indices.insert(m.indices.end(), {a, b, d, a, d, c, bottom, b, a, top, c, d});
+    m.ids.insert(m.ids.end(), {id, id, id, id});
+  }
+}
+
+// The CAD case that used to stall: hundreds of small closed parts (boxes, and cylinders of 24
+// sides) that touch no other, each its own object. Every level must halve (0.3 to 0.65 of the
+// one below while above a thousand triangles) down to one root cluster, errors must grow
+// strictly from child to parent, and every triangle at every level must name an object whose
+// box (grown by the triangle's cluster error) holds it.
+TEST(ClusterDag, ManySmallPartsHalveEveryLevelToOneCluster) {
+  Mesh m = scatteredBoxes(300, 23);
+  std::mt19937 rng(29);
+  std::uniform_real_distribution<float> where(0.0f, 40.0f), radius(0.05f, 0.2f), length(0.3f, 1.5f);
+  for (uint32_t c = 0; c < 300; ++c)
+    appendCylinder(m, {where(rng), where(rng), where(rng) * 0.25f}, radius(rng), length(rng),
+                   int(c % 3), 24, 3000 + c);
+  ASSERT_EQ(m.triangles(), 300u * 12 + 300u * 96);
   DagOptions options;
-  options.cluster_size = 256;
-  options.allow_drop = false;  // exercise meshopt_simplifySloppy and its boundary check
-  options.allow_proxy = false;
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
-  reportDag("2000 boxes, no drop", dag, -1.0);
-  EXPECT_GT(dag.stats.groups_sloppy, 0u);
-  EXPECT_LE(dag.triangles_per_level.back(), options.max_root_triangles);
-  for (size_t l = 1; l < dag.levelCount(); ++l)
-    EXPECT_LT(dag.triangles_per_level[l], dag.triangles_per_level[l - 1]);
+  reportDag("300 boxes + 300 cylinders", dag, -1.0);
+  expectWellFormed(dag, options, m.triangles());
+  for (size_t l = 1; l < dag.levelCount(); ++l) {
+    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
+    if (dag.triangles_per_level[l - 1] <= 1000) continue;
+    EXPECT_GE(ratio, 0.3) << "level " << l << " collapsed";
+    EXPECT_LE(ratio, 0.65) << "level " << l << " did not halve";
+  }
+  EXPECT_EQ(dag.clusters_per_level.back(), 1u);
+  for (const tw::DagGroup& g : dag.groups)
+    for (uint32_t c : g.children) EXPECT_GT(g.error, dag.clusters[c].error);
   expectCrackFreeCuts(dag, m);
+
+  std::map<uint32_t, std::pair<glm::vec3, glm::vec3>> boxes;
+  for (size_t t = 0; t < m.triangles(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const glm::vec3 p = m.positions[m.indices[3 * t + k]];
+      auto [it, fresh] = boxes.try_emplace(m.ids[t], p, p);
+      it->second.first = glm::min(it->second.first, p);
+      it->second.second = glm::max(it->second.second, p);
+    }
+  size_t misnamed = 0;
+  for (const DagCluster& c : dag.clusters)
+    for (size_t t = 0; t < c.triangleCount(); ++t) {
+      auto it = boxes.find(c.triangle_object_ids[t]);
+      ASSERT_NE(it, boxes.end()) << "an id the input does not have";
+      const glm::vec3 centroid = (c.positions[c.indices[3 * t]] + c.positions[c.indices[3 * t + 1]] +
+                                  c.positions[c.indices[3 * t + 2]]) / 3.0f;
+      const glm::vec3 slack(c.error + 1e-4f);
+      misnamed += glm::any(glm::lessThan(centroid, it->second.first - slack)) ||
+                  glm::any(glm::greaterThan(centroid, it->second.second + slack));
+    }
+  EXPECT_EQ(misnamed, 0u) << "triangles outside the object they name";
 }
 
 TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
   Mesh m = scatteredBoxes(2000, 13);
   DagOptions options;
   options.cluster_size = 256;
-  options.allow_sloppy = false;  // exercise dropping whole free components
+  options.allow_merge = false;  // exercise dropping whole free components
+  options.allow_sloppy = false;
   options.allow_proxy = false;
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
   reportDag("2000 boxes, no sloppy", dag, -1.0);
@@ -595,6 +663,7 @@ TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
 TEST(ClusterDag, FarProxiesReplaceDroppingForManySmallParts) {
   Mesh m = scatteredPipeStubs(800, 20, 17);  // 25600 triangles
   DagOptions options;
+  options.allow_merge = false;  // the chain behind vertex clustering, on its own
   options.allow_proxy = false;
   ClusterDag old_chain = tw::buildClusterDag(m.input(), options);
   reportDag("800 pipe stubs, no proxy", old_chain, -1.0);
@@ -739,12 +808,14 @@ TEST(ClusterDag, StanfordBunny) {
   double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   reportDag("stanford-bunny", dag, seconds);
   expectWellFormed(dag, options, m.triangles() - dag.stats.skipped_triangles);
-  // Locked borders keep the bunny's own holes exactly: every cut has the input's boundary.
+  // The bunny's own holes (its base) keep their outline in the fine cuts; coarse cuts may
+  // simplify their rims, never open the surface elsewhere (expectCrackFreeCuts).
   size_t overused = 0;
   int exact = expectCrackFreeCuts(dag, m, &overused, true);
-  std::printf("[ dag ] stanford-bunny: at most %zu more edges with over two triangles in a cut than the input\n",
-              overused);
-  EXPECT_EQ(exact, int(thresholds(dag).size()));
+  std::printf("[ dag ] stanford-bunny: at most %zu more edges with over two triangles in a cut "
+              "than the input; %d cuts of %zu with exactly its boundary\n",
+              overused, exact, thresholds(dag).size());
+  EXPECT_GE(exact, 1);
 }
 
 TEST(ClusterDag, KicadConnector) {

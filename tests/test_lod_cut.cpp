@@ -118,6 +118,7 @@ struct Model {
   std::unique_ptr<LodCut> cut;
   std::vector<std::vector<uint32_t>> triangles;  // per mesh cluster: welded vertex ids, 3 a tri
   std::unordered_set<uint64_t> level0_boundary;  // edges used by one level-0 triangle
+  std::unordered_set<uint32_t> level0_rim;  // vertices of level-0 edges not used exactly twice
   glm::dvec3 center_world{0.0};                  // of the package bounds
   double radius_m = 0.0;
   uint32_t bricks = 0;  // from the preprocessor's report (0: not built here)
@@ -184,8 +185,10 @@ std::unique_ptr<Model> loadModel(const fs::path& package) {
       for (uint32_t index : decoded.indices) model->triangles[c].push_back(ids[index]);
     }
   }
-  for (uint64_t edge : boundaryEdges(*model, model->cut->levelZeroClusters()))
-    model->level0_boundary.insert(edge);
+  for (const auto& [edge, count] : edgeCounts(*model, model->cut->levelZeroClusters())) {
+    if (count == 1) model->level0_boundary.insert(edge);
+    if (count != 2) model->level0_rim.insert({uint32_t(edge >> 32), uint32_t(edge)});
+  }
   const auto& h = view.header();
   glm::dvec3 lo(h.bounds_min[0], h.bounds_min[1], h.bounds_min[2]);
   glm::dvec3 hi(h.bounds_max[0], h.bounds_max[1], h.bounds_max[2]);
@@ -349,9 +352,13 @@ void expectValidCut(const Model& model, const std::vector<uint32_t>& drawn, cons
 void expectNoNewBoundary(const Model& model, const std::vector<uint32_t>& drawn,
                          const std::string& what, bool exact) {
   std::vector<uint64_t> boundary = boundaryEdges(model, drawn);
+  // A boundary edge is level 0's, or outlines one of its openings anew (both ends on its rims:
+  // the rims of parts' own openings simplify, preprocess/cluster_dag.h); anything else is a crack.
   size_t cracks = 0;
-  for (uint64_t edge : boundary) cracks += !model.level0_boundary.count(edge);
-  EXPECT_EQ(cracks, 0u) << what << ": boundary edges level 0 does not have";
+  for (uint64_t edge : boundary)
+    cracks += !model.level0_boundary.count(edge) &&
+              !(model.level0_rim.count(uint32_t(edge >> 32)) && model.level0_rim.count(uint32_t(edge)));
+  EXPECT_EQ(cracks, 0u) << what << ": boundary edges off level 0's rims";
   if (exact) {
     EXPECT_EQ(boundary.size(), model.level0_boundary.size()) << what;
   }
@@ -454,8 +461,8 @@ TEST(LodCut, CutsAreCrackFreeAndWithoutOverlap) {
       model.cut->select(view, everything(tau), kAllResident, result);
       std::string what = std::string("bunny ") + eye.name + " tau " + std::to_string(tau);
       expectValidCut(model, result.clusters, what);
-      // The bunny's DAG keeps its own holes' borders: exactly level 0's boundary.
-      expectNoNewBoundary(model, result.clusters, what, true);
+      // The bunny's holes may be outlined anew by coarse clusters, never opened elsewhere.
+      expectNoNewBoundary(model, result.clusters, what, false);
       checked += result.clusters.size();
     }
   EXPECT_GT(checked, 100u);

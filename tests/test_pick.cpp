@@ -103,11 +103,11 @@ TEST(Pick, NamesTheObjectUnderThePixelFromFarAndNear) {
   }
 }
 
-// From far, a real MEP model (926 pipes, ducts and fittings) is drawn in part with far proxies:
-// shells that stand for whole groups of small parts. An object whose triangles in the frame's cut
-// are all in far-proxy clusters can only show through a proxy; picking its pixels names it, at a
-// point on its box grown by the proxy's error.
-TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
+// From far, a real MEP model (926 pipes, ducts and fittings) is drawn from simplified clusters
+// where small parts have been merged (vertex clustering) or replaced. An object whose triangles
+// in the frame's cut are all in simplified clusters shows only through them; picking its pixels
+// names it, at a point on its box grown by the clusters' error.
+TEST(Pick, NamesTheObjectACoarseClusterStandsFor) {
   const auto model = test::sharedDataDir() / "duplex-mep.obj";
   if (!std::filesystem::exists(model)) GTEST_SKIP() << "shared data not present";
   const auto package = test::processScratchDir("pick_far_proxy") / "duplex-mep.twk";
@@ -124,7 +124,7 @@ TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
   const glm::dvec3 lo = walk.worldMin(), hi = walk.worldMax();
   const glm::dvec3 centre = 0.5 * (lo + hi);
   const double diagonal = glm::length(hi - lo);
-  int proxy_pixels_picked = 0;
+  int proxy_pixels_picked = 0, outside_box = 0;
   std::vector<uint8_t> raw;
   DecodedCluster decoded;
   for (double away : {1.5, 3.0, 4.5, 6.0, 9.0}) {
@@ -135,8 +135,8 @@ TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
     walk.renderSettled(camera);
     std::vector<uint32_t> ids;
     walk.renderer().readObjectIds(ids, true);
-    // Per object, the largest error of the proxies that carry it, and whether any other
-    // cluster of the cut does.
+    // Per object, the largest error of the simplified clusters that carry it, and whether any
+    // full-resolution cluster of the cut does.
     std::vector<float> proxy_error(view.objects().size(), -1.0f);
     std::vector<bool> elsewhere(view.objects().size(), false);
     for (uint32_t c : walk.lastCut()) {
@@ -144,7 +144,7 @@ TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
       view.readPage(r.page, raw);
       view.decodeCluster(c, raw, decoded);
       for (uint32_t o : decoded.triangle_objects) {
-        if (r.flags & pkg::kClusterFarProxy) proxy_error[o] = std::max(proxy_error[o], r.error);
+        if (r.error > 0.0f) proxy_error[o] = std::max(proxy_error[o], r.error);
         else elsewhere[o] = true;
       }
     }
@@ -160,17 +160,23 @@ TEST(Pick, NamesTheObjectAFarProxyStandsFor) {
       EXPECT_EQ(pick->object, object);
       const pkg::ObjectRecord& o = view.objects()[object];
       const double slack = double(proxy_error[object]) + 0.01 * pick->distance_m;
-      for (int a = 0; a < 3; ++a) {
-        EXPECT_GE(pick->world[a], view.origin()[a] + o.aabb_min[a] - slack) << a;
-        EXPECT_LE(pick->world[a], view.origin()[a] + o.aabb_max[a] + slack) << a;
-      }
+      bool inside = true;
+      for (int a = 0; a < 3; ++a)
+        inside = inside && pick->world[a] >= view.origin()[a] + o.aabb_min[a] - slack &&
+                 pick->world[a] <= view.origin()[a] + o.aabb_max[a] + slack;
+      outside_box += !inside;
       ++picked_here;
     }
     std::printf("%.1f diagonals away: %d pixels\n", away, picked_here);
     proxy_pixels_picked += picked_here;
   }
-  std::printf("%d pixels of objects drawn only by far proxies picked\n", proxy_pixels_picked);
-  EXPECT_GT(proxy_pixels_picked, 10) << "the far views should show far proxies";
+  std::printf("%d pixels of objects drawn only by simplified clusters picked, %d off the "
+              "object's grown box\n", proxy_pixels_picked, outside_box);
+  EXPECT_GT(proxy_pixels_picked, 10) << "the far views should show simplified clusters";
+  // A triangle edge collapse left between two welded parts takes the majority id of its three
+  // corners, so it may reach into the neighbour part (cluster_dag.h, "Object ids"): a few
+  // pixels may lie off the named object's box, never many.
+  EXPECT_LE(outside_box * 50, proxy_pixels_picked);
 }
 
 TEST(Pick, NothingUnderThePixelAndBadPixels) {

@@ -13,6 +13,7 @@
 #include "brick_cache.h"
 #include "file_reader.h"
 #include "consistent_winding.h"
+#include "repeated_triangles.h"
 #include "scene_bricking.h"
 #include "scene_io.h"
 #include "tessellate.h"
@@ -128,7 +129,7 @@ struct Tri {
 // piece turned (consistent_winding.h), counted in `turned`.
 std::vector<Tri> referenceTriangles(const std::vector<fs::path>& inputs, const glm::dvec3& origin,
                                     float tolerance, std::vector<SceneObject>* primitives,
-                                    uint64_t* turned = nullptr) {
+                                    uint64_t* turned = nullptr, uint64_t* repeated = nullptr) {
   std::vector<Tri> out;
   for (uint32_t i = 0; i < inputs.size(); ++i) {
     test::CollectingSink sink;
@@ -141,6 +142,9 @@ std::vector<Tri> referenceTriangles(const std::vector<fs::path>& inputs, const g
         tessellateNurbsConforming(*n, tolerance, mesh);
       else if (primitives)
         primitives->push_back(o);
+      const std::vector<uint32_t> repeats = repeatedTriangles(mesh);
+      if (repeated) *repeated += repeats.size();
+      mesh = withoutTriangles(mesh, repeats);
       const std::vector<uint32_t> turn = trianglesToTurn(mesh);
       turnTriangles(mesh, turn);
       if (turned) *turned += turn.size();
@@ -213,13 +217,14 @@ TEST(SceneBricking, BricksHoldExactlyTheInputTriangles) {
   EXPECT_EQ(scene.origin, glm::round(survey.bounds.center()));
 
   std::vector<SceneObject> primitives;
-  uint64_t turned = 0;
-  auto expected =
-      referenceTriangles(in.paths, scene.origin, options.nurbs_tolerance, &primitives, &turned);
+  uint64_t turned = 0, repeated = 0;
+  auto expected = referenceTriangles(in.paths, scene.origin, options.nurbs_tolerance, &primitives,
+                                     &turned, &repeated);
   auto actual = brickTriangles(scene);
   ASSERT_EQ(actual.size(), expected.size());
   EXPECT_TRUE(actual == expected);
   EXPECT_EQ(scene.triangles_turned, turned);
+  EXPECT_EQ(scene.triangles_repeated, repeated);
 
   // Brick bounds enclose their triangles.
   for (uint32_t b = 0; b < scene.bricks.size(); ++b) {

@@ -43,6 +43,15 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
   std::printf("  clusters    %llu mesh, %llu parametric (%u sorted runs on disk)\n",
               static_cast<unsigned long long>(r.clusters),
               static_cast<unsigned long long>(r.parametric_clusters), r.parametric_sort_runs);
+  const GroupMethodCounts& g = r.groups_by_method;
+  auto count = [&](GroupMethod m) { return static_cast<unsigned long long>(g[size_t(m)]); };
+  std::printf("  groups      %llu locked, %llu merged, %llu sloppy, %llu proxy, %llu dropped, "
+              "%llu unchanged\n",
+              count(GroupMethod::Locked), count(GroupMethod::Merged), count(GroupMethod::Sloppy),
+              count(GroupMethod::Proxy), count(GroupMethod::Dropped),
+              count(GroupMethod::PassThrough));
+  std::printf("  repeats     %llu mesh triangles dropped as exact copies of another\n",
+              static_cast<unsigned long long>(r.triangles_repeated));
   std::printf("  winding     %llu mesh triangles turned to agree with their piece\n",
               static_cast<unsigned long long>(r.triangles_turned));
   std::printf("  sealed runs %llu open parts, %llu closing cylinders\n",

@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "command.h"
+#include "dag_levels.h"
 #include "package_check.h"
 #include "package_view.h"
 
@@ -34,6 +35,35 @@ nlohmann::json countsToJson(const CheckCounts& c) {
           {"clusters", c.clusters},         {"groups", c.groups},
           {"vertices", c.vertices},         {"instances", c.instances},
           {"border_edges", c.border_edges}, {"boundary_edges", c.boundary_edges}};
+}
+
+nlohmann::json levelsToJson(const DagLevels& d) {
+  nlohmann::json levels = nlohmann::json::array();
+  for (const DagLevel& l : d.levels)
+    levels.push_back({{"triangles", l.triangles},
+                      {"clusters", l.clusters},
+                      {"ratio", l.ratio},
+                      {"max_error", l.max_error}});
+  return {{"levels", levels},
+          {"root_clusters", d.root_clusters},
+          {"halves", d.halves},
+          {"errors_monotone", d.errors_monotone}};
+}
+
+// The DAG's shape, three lines: triangles per level, each level's ratio to the one below, and
+// the largest error per level.
+void printLevels(const DagLevels& d) {
+  std::printf("  levels  %zu, mesh triangles:", d.levels.size());
+  for (const DagLevel& l : d.levels) std::printf(" %llu", static_cast<unsigned long long>(l.triangles));
+  std::printf("; root %u cluster%s\n", d.root_clusters, d.root_clusters == 1 ? "" : "s");
+  std::printf("  ratios ");
+  for (size_t l = 1; l < d.levels.size(); ++l) std::printf(" %.3f", d.levels[l].ratio);
+  std::printf(": %s\n", d.halves ? "every level above 1000 triangles halves (0.30 to 0.65)"
+                                  : "NOT every level above 1000 triangles within 0.30 to 0.65");
+  std::printf("  errors ");
+  for (const DagLevel& l : d.levels) std::printf(" %.3g", double(l.max_error));
+  std::printf(" (largest per level, metres): %s\n",
+              d.errors_monotone ? "monotone" : "NOT monotone");
 }
 
 }  // namespace
@@ -71,6 +101,7 @@ void registerVerifyCommand(CLI::App& app, const GlobalOptions& global) {
       j["ok"] = report.ok();
       j["checked"] = countsToJson(report.counts);
       j["seconds"] = seconds;
+      if (view) j["dag"] = levelsToJson(dagLevels(*view));
       if (report.failure) {
         const CheckFailure& f = *report.failure;
         nlohmann::json failure = {{"check", f.check}, {"what", f.what}, {"byte", f.file_offset}};
@@ -97,6 +128,7 @@ void registerVerifyCommand(CLI::App& app, const GlobalOptions& global) {
           static_cast<unsigned long long>(c.groups),
           static_cast<unsigned long long>(c.border_edges),
           static_cast<unsigned long long>(c.boundary_edges), seconds);
+      printLevels(dagLevels(*view));
     }
     if (!report.ok()) {
       view.reset();
