@@ -3,12 +3,13 @@
 #include "grid_weld.h"
 
 #include <algorithm>
-#include <glm/common.hpp>
 #include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <unordered_map>
+
+#include <glm/common.hpp>
 
 #include "package_format.h"
 
@@ -73,33 +74,72 @@ GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
   // representative, not a chain, bounds every move by one step.
   const double tolerance = position_step_m;
   std::vector<uint32_t> representative(positions.size());
-  std::unordered_map<uint64_t, std::vector<uint32_t>> representatives_in_cell;
-  auto cellKey = [](int64_t x, int64_t y, int64_t z) {
-    return uint64_t(x) * 0x9E3779B97F4A7C15ull ^ uint64_t(y) * 0xC2B2AE3D27D4EB4Full ^
-           uint64_t(z) * 0x165667B19E3779F9ull;
+  for (size_t v = 0; v < positions.size(); ++v) representative[v] = uint32_t(v);
+  // The candidates sorted by tolerance cell (then index), and each cell's range found through a
+  // flat open-addressing table: the 27 neighbouring cells of a vertex are probed without a map
+  // of vectors (one allocation per cell). Within a cell the earlier vertices come first, so the
+  // first representative found is the one the index-order scan would find.
+  struct Cell {
+    int64_t x, y, z;
+    auto operator<=>(const Cell&) const = default;
   };
+  std::vector<Cell> cell_of(positions.size());
+  std::vector<uint32_t> order;
+  order.reserve(positions.size());
   for (size_t v = 0; v < positions.size(); ++v) {
-    representative[v] = uint32_t(v);
     const glm::vec3& p = positions[v];
     if (vertex_shift[v] == kNoShift || !std::isfinite(p.x + p.y + p.z)) continue;
-    const int64_t cx = int64_t(std::floor(double(p.x) / tolerance)),
-                  cy = int64_t(std::floor(double(p.y) / tolerance)),
-                  cz = int64_t(std::floor(double(p.z) / tolerance));
+    cell_of[v] = {int64_t(std::floor(double(p.x) / tolerance)),
+                  int64_t(std::floor(double(p.y) / tolerance)),
+                  int64_t(std::floor(double(p.z) / tolerance))};
+    order.push_back(uint32_t(v));
+  }
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    return cell_of[a] < cell_of[b] || (cell_of[a] == cell_of[b] && a < b);
+  });
+  auto hashCell = [](const Cell& c) {
+    return uint64_t(c.x) * 0x9E3779B97F4A7C15ull ^ uint64_t(c.y) * 0xC2B2AE3D27D4EB4Full ^
+           uint64_t(c.z) * 0x165667B19E3779F9ull;
+  };
+  size_t table_size = 16;
+  while (table_size < 2 * order.size()) table_size *= 2;
+  constexpr uint32_t kEmptySlot = std::numeric_limits<uint32_t>::max();
+  std::vector<uint32_t> first_in_cell(table_size, kEmptySlot);  // index into order
+  auto slotOf = [&](const Cell& c) {
+    size_t i = size_t(hashCell(c)) & (table_size - 1);
+    while (first_in_cell[i] != kEmptySlot && cell_of[order[first_in_cell[i]]] != c)
+      i = (i + 1) & (table_size - 1);
+    return i;
+  };
+  for (size_t i = 0; i < order.size(); ++i)
+    if (i == 0 || cell_of[order[i]] != cell_of[order[i - 1]]) first_in_cell[slotOf(cell_of[order[i]])] = uint32_t(i);
+
+  // In index order, as the tolerance demands: a vertex joins the first earlier representative
+  // within the tolerance, scanning the neighbouring cells z, y, x.
+  std::vector<uint32_t> by_index = order;
+  std::sort(by_index.begin(), by_index.end());
+  for (uint32_t v : by_index) {
     const bool movable = keep.empty() || keep[v] == 0;
-    for (int64_t z = cz - 1; z <= cz + 1 && movable && representative[v] == v; ++z)
-      for (int64_t y = cy - 1; y <= cy + 1 && representative[v] == v; ++y)
-        for (int64_t x = cx - 1; x <= cx + 1 && representative[v] == v; ++x) {
-          auto it = representatives_in_cell.find(cellKey(x, y, z));
-          if (it == representatives_in_cell.end()) continue;
-          for (uint32_t r : it->second) {
-            const glm::dvec3 d = glm::abs(glm::dvec3(positions[r]) - glm::dvec3(p));
+    if (!movable) continue;
+    const Cell& c = cell_of[v];
+    const glm::dvec3 p(positions[v]);
+    for (int64_t z = c.z - 1; z <= c.z + 1 && representative[v] == v; ++z)
+      for (int64_t y = c.y - 1; y <= c.y + 1 && representative[v] == v; ++y)
+        for (int64_t x = c.x - 1; x <= c.x + 1 && representative[v] == v; ++x) {
+          const Cell n{x, y, z};
+          const uint32_t first = first_in_cell[slotOf(n)];
+          if (first == kEmptySlot) continue;
+          for (size_t i = first; i < order.size() && cell_of[order[i]] == n; ++i) {
+            const uint32_t r = order[i];
+            if (r >= v) break;
+            if (representative[r] != r) continue;
+            const glm::dvec3 d = glm::abs(glm::dvec3(positions[r]) - p);
             if (std::max({d.x, d.y, d.z}) <= tolerance) {
               representative[v] = r;
               break;
             }
           }
         }
-    if (representative[v] == v) representatives_in_cell[cellKey(cx, cy, cz)].push_back(uint32_t(v));
   }
   for (size_t v = 0; v < positions.size(); ++v) {
     const uint32_t r = representative[v];

@@ -3,6 +3,7 @@
 
 #include <sys/resource.h>
 
+#include <algorithm>
 #include <chrono>
 #include <limits>
 #include <memory>
@@ -15,6 +16,7 @@
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
+#include "memory_need.h"
 #include "parametrics/instance_flag_marking.h"
 #include "package_assembly.h"
 #include "package_rewrite.h"
@@ -235,6 +237,7 @@ void validateOptions(const PreprocessOptions& options) {
     throw std::invalid_argument("preprocess: parametric cluster size must be 1..65536");
   if (options.cluster_size < 64 || options.cluster_size > 4096)
     throw std::invalid_argument("cluster size must be between 64 and 4096 triangles");
+  requireMemoryBudget(options.memory_budget_bytes, memoryNeed(0, 0, 0));
 }
 
 // The options of every stage, and the resume store keyed by the inputs and those options (a
@@ -275,6 +278,14 @@ void PreprocessRun::brickInputs() {
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
                                      bricking_.exclude_layers);
     throwIfCancelled(progress_);
+    // The budget must hold the smallest brick this run can build (bricks sized from the budget
+    // shrink with it down to kMinBrickTriangles) and the per-object and per-instance tables: if
+    // it cannot, stop now rather than exceed it.
+    const uint64_t smallest_brick =
+        bricking_.max_brick_triangles ? bricking_.max_brick_triangles : kMinBrickTriangles;
+    requireMemoryBudget(options_.memory_budget_bytes,
+                        memoryNeed(std::min(smallest_brick, survey.triangles()), survey.objects,
+                                   survey.primitives));
     clock_.start("brick");
     scene_ = brickScene(options_.inputs, survey, bricking_);
     storeBrickedScene(cache_, scene_);

@@ -607,7 +607,8 @@ void splitBrick(BrickState& state, const std::filesystem::path& dir, uint64_t li
 
 uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
   if (options.max_brick_triangles) return options.max_brick_triangles;
-  return std::clamp<uint64_t>(options.memory_budget_bytes / 400, 64 * 1024, 4 * 1024 * 1024);
+  return std::clamp<uint64_t>(options.memory_budget_bytes / 400, kMinBrickTriangles,
+                              4 * 1024 * 1024);
 }
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,

@@ -59,6 +59,9 @@ struct BrickingOptions {
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
 uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options);
 
+// The smallest brick a budget-derived brick size goes down to.
+constexpr uint64_t kMinBrickTriangles = 64 * 1024;
+
 // Pass 1 result. Counts are summed over all inputs.
 struct SceneSurvey {
   Aabb bounds;           // world bounds of all geometry (primitives: transformed local box)

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <string>
@@ -299,6 +300,32 @@ TEST(Cli, PreprocessVerifyAndInfoOnTheKicadConnector) {
               0.6 * j["levels"][level - 1]["triangles"].get<double>())
         << "level " << level;
   EXPECT_LE(j["bytes_per_input_triangle"].get<double>(), 24.0);
+}
+
+// A budget the preprocessor cannot keep to stops the run at once with the smallest budget this
+// input needs, and that budget then works: 1K before any input is read, 2M after the survey
+// (the smallest brick of the bunny alone needs more).
+TEST(Cli, PreprocessStopsAtOnceWhenTheMemoryBudgetIsTooSmall) {
+  auto file = test::sharedDataDir() / "stanford-bunny.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto twk = test::scratchDir() / "bunny.twk";
+  RunResult tiny = run("preprocess --quiet --memory-budget 1K " + file.string() + " -o " + twk.string());
+  EXPECT_NE(tiny.exit_code, 0);
+  EXPECT_NE(tiny.output.find("--memory-budget 1.0 KiB is below what this input needs"),
+            std::string::npos) << tiny.output;
+  RunResult small = run("preprocess --quiet --memory-budget 2M " + file.string() + " -o " + twk.string());
+  EXPECT_NE(small.exit_code, 0);
+  const size_t at = small.output.find("at least ");
+  ASSERT_NE(at, std::string::npos) << small.output;
+  EXPECT_NE(small.output.find("brick build"), std::string::npos) << small.output;
+  EXPECT_FALSE(std::filesystem::exists(twk));
+  EXPECT_FALSE(std::filesystem::exists(twk.string() + ".work")) << "work directory left behind";
+  const double needed_mib = std::stod(small.output.substr(at + 9));
+  EXPECT_GT(needed_mib, 2.0);
+  const std::string enough = std::to_string(int(std::ceil(needed_mib))) + "M";
+  RunResult ok = run("preprocess --quiet --memory-budget " + enough + " " + file.string() + " -o " +
+                     twk.string());
+  EXPECT_EQ(ok.exit_code, 0) << enough << ": " << ok.output;
 }
 
 // A real MEP model (926 pipes, ducts and fittings; a third of its triangles exact copies): its
