@@ -17,6 +17,9 @@
 #include "far_proxy.h"
 #include "grid_weld.h"
 #include "locked_vertex_clustering.h"
+#include "near_group_vertices.h"
+#include "package_format.h"
+#include "page_codec.h"
 #include "repeated_triangles.h"
 #include "union_find.h"
 
@@ -132,6 +135,8 @@ struct LevelContext {
   const std::vector<uint32_t>& vertex_owner;      // group id, or kMulti
   const std::vector<uint64_t>& shared_edges;  // global edges used by several groups, sorted
   const std::vector<uint8_t>& open_vertex;         // on a locked open edge (lock_open_boundaries)
+  const std::vector<uint8_t>& near_other_group;    // within the package's grid error of another
+                                                   // group's vertex (near_group_vertices.h)
   const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
   const DagOptions& options;
   // false: a group that wants a far proxy (options.allow_proxy) only says so (GroupOutcome::
@@ -241,9 +246,11 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   const size_t stride = sizeof(glm::vec3);
   const float scale = meshopt_simplifyScale(pos, vcount, stride);
   auto isMulti = [&](uint32_t local) { return ctx.vertex_owner[l2g[local]] == kMulti; };
-  // A vertex that pins its component: shared with another group, or on a locked open edge.
+  // A vertex that pins its component: shared with another group, on a locked open edge, or
+  // where another group's vertex almost touches it.
   auto isPinned = [&](uint32_t local) {
-    return isMulti(local) || (!ctx.open_vertex.empty() && ctx.open_vertex[l2g[local]]);
+    return isMulti(local) || (!ctx.open_vertex.empty() && ctx.open_vertex[l2g[local]]) ||
+           ctx.near_other_group[l2g[local]];
   };
 
   const EdgeCounts in = countEdges(ltris, vcount);
@@ -709,6 +716,11 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       if (isLockedEdge(j - i, positions[a], positions[b], options)) {
         open_edges.push_back(keys[i]);
         open_vertex[uint32_t(keys[i] >> 32)] = open_vertex[uint32_t(keys[i])] = 1;
+      } else if (j - i != 2 && options.is_near_other_brick) {
+        // A rim where another brick may hold geometry within the package's grid error: held
+        // like a seam (never moved), though it is not one bit for bit.
+        for (uint32_t v : {a, b})
+          if (options.is_near_other_brick(positions[v])) open_vertex[v] = 1;
       }
       i = j;
     }
@@ -719,6 +731,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
   const std::vector<glm::vec3>* all_positions = &positions;
   std::vector<glm::vec3> grown_positions;
   std::vector<uint32_t> vertex_owner(positions.size());
+  std::vector<uint8_t> near_other_group(positions.size(), 0);
   std::vector<uint32_t> slot(positions.size(), kUnowned);
   while (current_work.size() > 1) {
     // Fixed for the level: the groups number new vertices from its size.
@@ -793,8 +806,36 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       // a proxy came down to its floor (or when it cannot be retried) do those groups run again
       // with one. The outcome is the same as building them all, at a fraction of the cost (on
       // the 10M plant 64% of the proxies were built in attempts that were retried).
-      LevelContext ctx{level_positions, vertex_owner, shared_edges, open_vertex, open_edges,
-                       options, !options.allow_proxy};
+      // Vertices almost touching another group's, within what the package's grid will not
+      // tell apart: the largest group decides the coarsest grid of the level (grid_weld.h).
+      for (const WorkCluster& wc : current_work)
+        for (uint32_t v : wc.tris) near_other_group[v] = 0;
+      if (options.position_step_m > 0.0) {
+        glm::vec3 largest(0.0f);
+        for (const std::vector<uint32_t>& members : groups) {
+          glm::vec3 lo(INFINITY), hi(-INFINITY);
+          for (uint32_t m : members) {
+            lo = glm::min(lo, dag.clusters[current_ids[m]].box_min);
+            hi = glm::max(hi, dag.clusters[current_ids[m]].box_max);
+          }
+          largest = glm::max(largest, hi - lo);
+        }
+        const glm::vec3 extent[2] = {glm::vec3(0.0f), largest};
+        const uint32_t shift = std::min<uint32_t>(
+            clusterPositionShift(extent, options.position_step_m), pkg::kMaxPositionShift);
+        const float tolerance =
+            float(2.0 * quantizationErrorM(options.position_step_m, shift));
+        std::vector<uint32_t> level_vertices;
+        for (const WorkCluster& wc : current_work)
+          level_vertices.insert(level_vertices.end(), wc.tris.begin(), wc.tris.end());
+        std::sort(level_vertices.begin(), level_vertices.end());
+        level_vertices.erase(std::unique(level_vertices.begin(), level_vertices.end()),
+                             level_vertices.end());
+        markVerticesNearOtherGroups(level_positions, level_vertices, vertex_owner, kMulti,
+                                    tolerance, near_other_group);
+      }
+      LevelContext ctx{level_positions, vertex_owner,     shared_edges, open_vertex,
+                       near_other_group, open_edges,      options,      !options.allow_proxy};
       outcomes.assign(groups.size(), GroupOutcome{});
       tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 1),
                         [&](const tbb::blocked_range<size_t>& range) {
@@ -874,6 +915,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         grown_positions.insert(grown_positions.end(), o.new_positions.begin(),
                                o.new_positions.end());
         vertex_owner.resize(grown_positions.size());
+        near_other_group.resize(grown_positions.size(), 0);
         slot.resize(grown_positions.size(), kUnowned);
         if (!open_vertex.empty()) open_vertex.resize(grown_positions.size(), 0);
       }

@@ -129,6 +129,12 @@ struct DagOptions {
   // in an unlocked build. The preprocessor passes the true brick seams (brick_seams.h), so CAD
   // parts with open edges of their own (uncapped pipes, sheets) still simplify and drop.
   std::function<bool(const glm::vec3&, const glm::vec3&)> is_seam_edge;
+  // With lock_open_boundaries: when set, the vertices of the input's rim edges (used other than
+  // twice) for which it returns true are held too (never moved, their parts never free). The
+  // preprocessor passes "inside another brick's bounds, padded by the package's grid error":
+  // rims that almost meet another brick's geometry without being bit-identical seams would
+  // otherwise move on one side only.
+  std::function<bool(const glm::vec3&)> is_near_other_brick;
   // When > 0: the package's base position step (metres). Full-resolution vertices are snapped to
   // the grid their level-0 cluster will be stored on, and welded where they coincide
   // (grid_weld.h), so that vertices the package will store as one are one vertex in the DAG too.

@@ -16,7 +16,9 @@
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
+#include "grid_weld.h"
 #include "memory_need.h"
+#include "page_codec.h"
 #include "parametrics/instance_flag_marking.h"
 #include "package_assembly.h"
 #include "package_rewrite.h"
@@ -204,6 +206,7 @@ class PreprocessRun {
   std::string databasePathFrom(const std::filesystem::path& package) const;
   void packMeshClusters();
   void packParametricClusters();
+  DagOptions optionsForBrick(uint32_t b) const;
   SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All}; }
 
   const PreprocessOptions& options_;
@@ -314,6 +317,34 @@ void PreprocessRun::findSeams() {
   };
 }
 
+// The DAG options of brick b: the run's, plus (with several bricks) the test for rims lying
+// within another brick's bounds, padded by twice the package's grid error at the coarsest grid
+// a cluster of the model could use.
+DagOptions PreprocessRun::optionsForBrick(uint32_t b) const {
+  DagOptions options = brick_options_;
+  if (scene_.bricks.size() <= 1) return options;
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (const BrickInfo& brick : scene_.bricks) {
+    lo = glm::min(lo, brick.bounds_min);
+    hi = glm::max(hi, brick.bounds_max);
+  }
+  const glm::vec3 extent[2] = {glm::vec3(0.0f), hi - lo};
+  const uint32_t shift = std::min<uint32_t>(
+      clusterPositionShift(extent, storage_.position_step_m), pkg::kMaxPositionShift);
+  const float pad = float(2.0 * quantizationErrorM(storage_.position_step_m, shift));
+  options.is_near_other_brick = [this, b, pad](const glm::vec3& p) {
+    for (uint32_t other = 0; other < scene_.bricks.size(); ++other) {
+      if (other == b) continue;
+      const BrickInfo& box = scene_.bricks[other];
+      if (glm::all(glm::lessThanEqual(box.bounds_min - pad, p)) &&
+          glm::all(glm::lessThanEqual(p, box.bounds_max + pad)))
+        return true;
+    }
+    return false;
+  };
+  return options;
+}
+
 // 2b. One LOD DAG per brick. A finished brick goes to the resume store; memory keeps its roots
 // (for the merge) and its quantization shifts (snapping pass 1, solved now while it is in
 // memory). The last brick's DAG stays too when it is within budget / 8, so a one-brick model is
@@ -335,8 +366,8 @@ void PreprocessRun::buildBricks() {
       ++report_.bricks_reused;
     } else {
       BrickMesh mesh = loadBrick(scene_, b);
-      dag = buildClusterDag(
-          DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids}, brick_options_);
+      dag = buildClusterDag(DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids},
+                            optionsForBrick(b));
       mesh = BrickMesh{};
       blob = serializeClusterDag(dag);
       cache_.store(b, *blob);
@@ -379,7 +410,11 @@ void PreprocessRun::mergeUpperLevels() {
   clock_.start("merge");
   beginStage(progress_, "merge bricks", 0);
   {
-    MergedRoots merged = mergeBrickRoots(std::move(roots_), dag_options_);
+    // The merged levels hold near-touching rims of different groups too (near_group_vertices.h):
+    // they need the package's grid step for it, which the merge uses for nothing else.
+    DagOptions merge_options = dag_options_;
+    merge_options.position_step_m = storage_.position_step_m;
+    MergedRoots merged = mergeBrickRoots(std::move(roots_), merge_options);
     roots_ = {};
     report_.root_triangles = merged.dag.root_triangles;
     std::vector<uint32_t> root_global;  // merged front index -> DAG cluster

@@ -458,7 +458,9 @@ void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) 
   // Headless runs wait for the GPU anyway, so they report this frame's own GPU time; the window
   // takes the newest finished one (a frame or two old) rather than stall.
   if (options_.finish_each_frame) {
+    const Clock::time_point finish_start = Clock::now();
     glFinish();
+    stats.finish_ms = msSince(finish_start);
     stats.gpu_ms = renderer_->waitForGpuMs();
   } else {
     stats.gpu_ms = render_stats.gpu_ms;

@@ -26,6 +26,7 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("frame_ms", s.frame_ms);
   visit("cpu_cut_ms", s.cpu_cut_ms);
   visit("gpu_ms", s.gpu_ms);
+  visit("finish_ms", s.finish_ms);
   visit("tau_px", s.tau_px);
   visit("nodes_visited", s.nodes_visited);
   visit("nodes_drawn", s.nodes_drawn);

@@ -290,6 +290,7 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"first_frame_ms", first_frame_ms},
       {"median_frame_ms", medianOf(all, [](const FrameStats& f) { return f.frame_ms; })},
       {"median_gpu_ms", medianOf(all, [](const FrameStats& f) { return f.gpu_ms; })},
+      {"median_finish_ms", medianOf(all, [](const FrameStats& f) { return f.finish_ms; })},
       {"median_cpu_cut_ms", medianOf(all, [](const FrameStats& f) { return f.cpu_cut_ms; })},
       {"median_triangles", medianOf(all, [](const FrameStats& f) { return f.triangles_drawn; })},
       // Mesh clusters and run-time parametric meshes together: what the frame rasterized.

@@ -53,7 +53,7 @@ nlohmann::json levelsToJson(const DagLevels& d) {
 // The DAG's shape, three lines: triangles per level, each level's ratio to the one below, and
 // the largest error per level.
 void printLevels(const DagLevels& d) {
-  std::printf("  levels  %zu, mesh triangles:", d.levels.size());
+  std::printf("  levels  %zu, mesh triangles per level's front:", d.levels.size());
   for (const DagLevel& l : d.levels) std::printf(" %llu", static_cast<unsigned long long>(l.triangles));
   std::printf("; root %u cluster%s\n", d.root_clusters, d.root_clusters == 1 ? "" : "s");
   std::printf("  ratios ");
