@@ -17,9 +17,8 @@ struct FrameStats {
   double cpu_cut_ms = 0.0;     // LOD traversal (select + prefetch)
   double gpu_ms = 0.0;         // draw time from GL timer queries
   // Headless: wall time spent in the frame's final glFinish, the drawing still to do after the
-  // CPU submitted it. On llvmpipe the timer queries see only the command submission (binning),
-  // not the rasterizer threads, so this, not gpu_ms, is where most of a small model's frame goes
-  // (docs/runtime.md, "Frame time on llvmpipe"). 0 in the window.
+  // draw calls returned. On llvmpipe vertex processing and binning run inside the draw calls,
+  // outside both this and gpu_ms (docs/runtime.md, "Frame time on llvmpipe"). 0 in the window.
   double finish_ms = 0.0;
   double tau_px = 0.0;         // the tau in use (changes with --target-fps)
   uint32_t nodes_visited = 0;  // groups visited + clusters tested

@@ -637,6 +637,30 @@ TEST(ClusterDag, ManySmallPartsHalveEveryLevelToOneCluster) {
   EXPECT_EQ(misnamed, 0u) << "triangles outside the object they name";
 }
 
+// Open parts whose every vertex is on a rim (pipe stubs without caps): locked edge collapse
+// cannot touch them; vertex clustering with the border held halves them, level after level, and
+// every cut's boundary stays on the input's rims.
+TEST(ClusterDag, VertexClusteringHalvesOpenPartsLockedCollapseCannotTouch) {
+  Mesh m = scatteredPipeStubs(800, 20, 17);  // 25600 triangles
+  DagOptions options;
+  ClusterDag dag = tw::buildClusterDag(m.input(), options);
+  reportDag("800 pipe stubs, vertex clustering", dag, -1.0);
+  expectWellFormed(dag, options, m.triangles());
+  EXPECT_GT(dag.stats.groups_merged, 0u);
+  EXPECT_EQ(dag.stats.level_retries, 0u);
+  for (size_t l = 1; l < dag.levelCount(); ++l) {
+    if (dag.triangles_per_level[l - 1] <= 1000) continue;
+    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
+    EXPECT_GE(ratio, 0.3) << "level " << l;
+    EXPECT_LE(ratio, 0.65) << "level " << l;
+  }
+  EXPECT_EQ(dag.clusters_per_level.back(), 1u);
+  expectCrackFreeCuts(dag, m);
+  std::set<uint32_t> input_ids(m.ids.begin(), m.ids.end());
+  for (const DagCluster& c : dag.clusters)
+    for (uint32_t id : c.triangle_object_ids) ASSERT_TRUE(input_ids.count(id));
+}
+
 TEST(ClusterDag, DropFallbackAloneKeepsBoxesClosed) {
   Mesh m = scatteredBoxes(2000, 13);
   DagOptions options;
