@@ -18,8 +18,6 @@
 #include "grid_weld.h"
 #include "locked_vertex_clustering.h"
 #include "near_group_vertices.h"
-#include "package_format.h"
-#include "page_codec.h"
 #include "repeated_triangles.h"
 #include "union_find.h"
 
@@ -309,11 +307,10 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
       if (borderPreserved(in, shared, merged.tris, vcount, &locked)) {
         std::vector<uint32_t> ids(merged.source_triangle.size());
         for (size_t t = 0; t < ids.size(); ++t) ids[t] = gids[merged.source_triangle[t]];
-        Candidate c{std::move(merged.tris), std::move(ids), merged.error, GroupMethod::Merged, {}};
-        if (!locked_fits && c.tris.size() / 3 <= limit)
-          consider(std::move(c));
-        else if (c.tris.size() / 3 <= limit && c.error < best.error)
-          best = std::move(c);
+        // It is smaller than best (tested above); it must reach the target, and beat a locked
+        // result that reached it too on error.
+        if (merged.tris.size() / 3 <= limit && (!locked_fits || merged.error < best.error))
+          best = {std::move(merged.tris), std::move(ids), merged.error, GroupMethod::Merged, {}};
       } else {
         outcome.merged_rejected = true;
       }
@@ -820,11 +817,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
           }
           largest = glm::max(largest, hi - lo);
         }
-        const glm::vec3 extent[2] = {glm::vec3(0.0f), largest};
-        const uint32_t shift = std::min<uint32_t>(
-            clusterPositionShift(extent, options.position_step_m), pkg::kMaxPositionShift);
-        const float tolerance =
-            float(2.0 * quantizationErrorM(options.position_step_m, shift));
+        const float tolerance = packageGridTolerance(largest, options.position_step_m);
         std::vector<uint32_t> level_vertices;
         for (const WorkCluster& wc : current_work)
           level_vertices.insert(level_vertices.end(), wc.tris.begin(), wc.tris.end());

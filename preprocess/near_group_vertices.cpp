@@ -6,7 +6,18 @@
 #include <cmath>
 #include <limits>
 
+#include "grid_weld.h"
+#include "package_format.h"
+#include "page_codec.h"
+
 namespace tw {
+
+float packageGridTolerance(const glm::vec3& extent, double position_step_m) {
+  const glm::vec3 corners[2] = {glm::vec3(0.0f), extent};
+  const uint32_t shift = std::min<uint32_t>(clusterPositionShift(corners, position_step_m),
+                                            pkg::kMaxPositionShift);
+  return float(2.0 * quantizationErrorM(position_step_m, shift));
+}
 
 void markVerticesNearOtherGroups(std::span<const glm::vec3> positions,
                                  std::span<const uint32_t> vertices,

@@ -17,6 +17,10 @@
 
 namespace tw {
 
+// How far apart two vertices may be and still decode as one: twice the package's quantization
+// error at the grid a cluster of this extent is stored on (grid_weld.h, clusterPositionShift).
+float packageGridTolerance(const glm::vec3& extent, double position_step_m);
+
 // For each vertex in `vertices` (indices into positions, each once) whose group (owner[v]) is a
 // single group, sets near[v] = 1 when a vertex of another group, or a shared one (owner
 // `multi`), lies within `tolerance` on every axis. Shared vertices are not marked themselves

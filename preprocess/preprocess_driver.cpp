@@ -16,9 +16,8 @@
 #include "cluster_dag.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
-#include "grid_weld.h"
 #include "memory_need.h"
-#include "page_codec.h"
+#include "near_group_vertices.h"
 #include "parametrics/instance_flag_marking.h"
 #include "package_assembly.h"
 #include "package_rewrite.h"
@@ -328,10 +327,7 @@ DagOptions PreprocessRun::optionsForBrick(uint32_t b) const {
     lo = glm::min(lo, brick.bounds_min);
     hi = glm::max(hi, brick.bounds_max);
   }
-  const glm::vec3 extent[2] = {glm::vec3(0.0f), hi - lo};
-  const uint32_t shift = std::min<uint32_t>(
-      clusterPositionShift(extent, storage_.position_step_m), pkg::kMaxPositionShift);
-  const float pad = float(2.0 * quantizationErrorM(storage_.position_step_m, shift));
+  const float pad = packageGridTolerance(hi - lo, storage_.position_step_m);
   options.is_near_other_brick = [this, b, pad](const glm::vec3& p) {
     for (uint32_t other = 0; other < scene_.bricks.size(); ++other) {
       if (other == b) continue;
