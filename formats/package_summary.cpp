@@ -121,6 +121,7 @@ PackageSummary summarizePackage(const PackageView& view) {
     v.candidate_level = vh.candidate_level;
     v.candidate_triangles = vh.candidate_triangles;
     v.visible_sets = (vh.flags & pkg::kVisibleSetsPresent) != 0;
+    v.parametric_candidates = (vh.flags & pkg::kParametricCandidates) != 0;
     v.occluder_ids = vh.occluder_id_count;
     v.visible_ids = vh.visible_id_count;
     v.average_occluders = vis.averageOccluders();

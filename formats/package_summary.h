@@ -82,6 +82,7 @@ struct PackageSummary {
     uint32_t candidate_level = 0;
     uint64_t candidate_triangles = 0;
     bool visible_sets = false;
+    bool parametric_candidates = false;  // kParametricCandidates
     uint64_t occluder_ids = 0, visible_ids = 0;
     double average_occluders = 0.0;  // per stored cell
     double average_visible = 0.0;    // per stored cell (0 without visible sets)

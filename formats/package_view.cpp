@@ -503,17 +503,27 @@ void PackageView::validateVisibility() {
   if (v.candidate_level >= header_->level_count)
     fail(offsetOf(&v.candidate_level), "visibility: candidate level " + str(v.candidate_level) +
                                            " >= level count " + str(header_->level_count));
-  // Candidates are drawn as meshes (occluders) and mapped through the DAG (visible sets).
+  // Candidates are mesh clusters (drawn as occluders, mapped through the DAG) and, when the
+  // section says so, parametric clusters.
+  const bool parametric = (v.flags & kParametricCandidates) != 0;
   auto checkMesh = [&](std::span<const uint32_t> ids, const char* what) {
-    for (const uint32_t& id : ids)
-      if (clusters_[id].kind != static_cast<uint8_t>(ClusterKind::Mesh))
+    for (const uint32_t& id : ids) {
+      const uint8_t kind = clusters_[id].kind;
+      if (kind != static_cast<uint8_t>(ClusterKind::Mesh) &&
+          !(parametric && kind == static_cast<uint8_t>(ClusterKind::Parametric)))
         fail(offsetOf(&id), std::string("visibility: ") + what + " id " + str(id) +
-                                " is not a mesh cluster");
+                                (parametric ? " is neither a mesh nor a parametric cluster"
+                                            : " is not a mesh cluster"));
+    }
   };
   for (const VisibilityCellRecord& c : visibility_cells_.cells()) {
     checkMesh(visibility_cells_.occluders(c), "occluder");
     checkMesh(visibility_cells_.visible(c), "visible");
   }
+  for (const uint32_t& id : visibility_cells_.parametricCandidates())
+    if (clusters_[id].kind != static_cast<uint8_t>(ClusterKind::Parametric))
+      fail(offsetOf(&id), "visibility: parametric candidate " + str(id) +
+                              " is not a parametric cluster");
 }
 
 void PackageView::verifyAll() {

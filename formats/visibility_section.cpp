@@ -20,7 +20,7 @@ namespace {
 using pkg::VisibilityCellRecord;
 using pkg::VisibilityHeader;
 
-constexpr uint32_t kAllFlags = pkg::kVisibleSetsPresent;
+constexpr uint32_t kAllFlags = pkg::kVisibleSetsPresent | pkg::kParametricCandidates;
 // Grid indices are uint32 and UINT32_MAX means "outside", so a grid has fewer cells than that.
 constexpr uint64_t kMaxGridCells = std::numeric_limits<uint32_t>::max();
 
@@ -66,6 +66,11 @@ std::vector<uint8_t> encodeVisibility(const VisibilityData& data) {
     occluder_ids += c.occluders.size();
     visible_ids += c.visible.size();
   }
+  if (!data.parametric_occluders && !data.parametric_candidates.empty())
+    bad("parametric candidates listed but parametric_occluders is off");
+  for (size_t k = 1; k < data.parametric_candidates.size(); ++k)
+    if (data.parametric_candidates[k] <= data.parametric_candidates[k - 1])
+      bad("parametric candidates are not strictly ascending");
   // first_occluder / first_visible are uint32.
   if (occluder_ids > std::numeric_limits<uint32_t>::max() ||
       visible_ids > std::numeric_limits<uint32_t>::max())
@@ -87,11 +92,14 @@ std::vector<uint8_t> encodeVisibility(const VisibilityData& data) {
   h.rays_per_cell = data.rays_per_cell;
   h.candidate_level = data.candidate_level;
   h.solid_cells = data.solid_cells;
-  h.flags = data.visible_sets ? pkg::kVisibleSetsPresent : 0u;
+  h.flags = (data.visible_sets ? pkg::kVisibleSetsPresent : 0u) |
+            (data.parametric_occluders ? pkg::kParametricCandidates : 0u);
   h.candidate_triangles = data.candidate_triangles;
+  h.parametric_candidate_count = data.parametric_candidates.size();
 
-  const size_t total = sizeof(VisibilityHeader) + data.cells.size() * sizeof(VisibilityCellRecord) +
-                       (occluder_ids + visible_ids) * sizeof(uint32_t);
+  const size_t total =
+      sizeof(VisibilityHeader) + data.cells.size() * sizeof(VisibilityCellRecord) +
+      (occluder_ids + visible_ids + data.parametric_candidates.size()) * sizeof(uint32_t);
   std::vector<uint8_t> out(total);
   std::memcpy(out.data(), &h, sizeof(h));
   uint8_t* record_at = out.data() + sizeof(VisibilityHeader);
@@ -118,6 +126,9 @@ std::vector<uint8_t> encodeVisibility(const VisibilityData& data) {
     next_occluder += r.occluder_count;
     next_visible += r.visible_count;
   }
+  if (!data.parametric_candidates.empty())
+    std::memcpy(visible_at + visible_ids * sizeof(uint32_t), data.parametric_candidates.data(),
+                data.parametric_candidates.size() * sizeof(uint32_t));
   return out;
 }
 
@@ -149,8 +160,7 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
     fail(at(&h.cell_record_bytes), "cell record size " + str(h.cell_record_bytes) +
                                        " != " + str(sizeof(VisibilityCellRecord)));
   if (h.flags & ~kAllFlags) fail(at(&h.flags), "unknown flags " + str(h.flags & ~kAllFlags));
-  if (h.reserved[0] != 0 || h.reserved[1] != 0)
-    fail(at(&h.reserved), "reserved header fields are not zero");
+  if (h.reserved != 0) fail(at(&h.reserved), "reserved header field is not zero");
 
   // Grid.
   if (h.grid_dims[0] == 0 || h.grid_dims[1] == 0 || h.grid_dims[2] == 0)
@@ -173,6 +183,10 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
   const bool has_visible = (h.flags & pkg::kVisibleSetsPresent) != 0;
   if (!has_visible && h.visible_id_count != 0)
     fail(at(&h.visible_id_count), "visible ids present but the visible-sets flag is off");
+  const bool has_parametric = (h.flags & pkg::kParametricCandidates) != 0;
+  if (!has_parametric && h.parametric_candidate_count != 0)
+    fail(at(&h.parametric_candidate_count),
+         "parametric candidates listed but the parametric flag is off");
 
   // Counts against the bytes that hold them, each before the next is used.
   uint64_t remaining = size - sizeof(VisibilityHeader);
@@ -188,8 +202,13 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
     fail(at(&h.visible_id_count), str(h.visible_id_count) + " visible ids need more than the " +
                                       str(remaining) + " bytes after the occluder ids");
   remaining -= h.visible_id_count * sizeof(uint32_t);
+  if (h.parametric_candidate_count > remaining / sizeof(uint32_t))
+    fail(at(&h.parametric_candidate_count),
+         str(h.parametric_candidate_count) + " parametric candidate ids need more than the " +
+             str(remaining) + " bytes after the visible ids");
+  remaining -= h.parametric_candidate_count * sizeof(uint32_t);
   if (remaining != 0)
-    fail(size - remaining, str(remaining) + " trailing bytes after the visible ids");
+    fail(size - remaining, str(remaining) + " trailing bytes after the last ids");
 
   const uint8_t* cells_at = bytes.data() + sizeof(VisibilityHeader);
   const uint8_t* occluders_at = cells_at + uint64_t{h.cell_count} * sizeof(VisibilityCellRecord);
@@ -200,6 +219,9 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
                                          h.occluder_id_count);
   std::span<const uint32_t> visible_ids(reinterpret_cast<const uint32_t*>(visible_at),
                                         h.visible_id_count);
+  std::span<const uint32_t> parametric_ids(
+      reinterpret_cast<const uint32_t*>(visible_at + h.visible_id_count * sizeof(uint32_t)),
+      h.parametric_candidate_count);
 
   // Ids first (one pass each), so the per-cell checks below only look at ranges and order.
   for (const uint32_t& id : occluder_ids)
@@ -210,6 +232,13 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
     if (id >= cluster_count)
       fail(at(&id), "visible id " + str(id) + " is out of range (" + str(cluster_count) +
                         " clusters)");
+  for (size_t k = 0; k < parametric_ids.size(); ++k) {
+    if (parametric_ids[k] >= cluster_count)
+      fail(at(&parametric_ids[k]), "parametric candidate " + str(parametric_ids[k]) +
+                                       " is out of range (" + str(cluster_count) + " clusters)");
+    if (k > 0 && parametric_ids[k] <= parametric_ids[k - 1])
+      fail(at(&parametric_ids[k]), "parametric candidates are not strictly ascending");
+  }
 
   for (size_t i = 0; i < cells.size(); ++i) {
     const VisibilityCellRecord& c = cells[i];
@@ -244,6 +273,7 @@ VisibilityView VisibilityView::parse(std::span<const uint8_t> bytes, const std::
   view.cells_ = cells;
   view.occluder_ids_ = occluder_ids;
   view.visible_ids_ = visible_ids;
+  view.parametric_candidate_ids_ = parametric_ids;
   return view;
 }
 

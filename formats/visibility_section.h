@@ -5,13 +5,14 @@
 //
 // Candidates are the mesh clusters of one DAG front (occlusion/dag_front.h): the clusters that
 // exist when the groups of `candidate_level` are simplified, a complete crack-free surface at
-// that level. The runtime draws a cell's occluders into the occlusion depth buffer, and maps a
+// that level, and (flag kParametricCandidates) the parametric clusters. The runtime draws a cell's occluders into the occlusion depth buffer, and maps a
 // visible set onto whatever cut it draws (occlusion/pvs_mapping.h).
 //
 // Layout (little-endian, inside the byte section SectionType::Visibility, whose offset in the
 // file is a multiple of 8): VisibilityHeader (128 bytes), cell_count VisibilityCellRecord
-// (32 bytes each, strictly increasing grid_index), occluder_id_count uint32 cluster ids, then
-// visible_id_count uint32 cluster ids. An empty section means "no visibility data" (format 1.0
+// (32 bytes each, strictly increasing grid_index), occluder_id_count uint32 cluster ids,
+// visible_id_count uint32 cluster ids, then parametric_candidate_count uint32 cluster ids
+// (strictly ascending; only with kParametricCandidates). An empty section means "no visibility data" (format 1.0
 // packages, or `--visibility off`). Spec: docs/package-format.md, "Visibility".
 #pragma once
 
@@ -30,6 +31,12 @@ inline constexpr char kVisibilityMagic[8] = {'T', 'W', 'V', 'I', 'S', '0', '0', 
 
 enum VisibilityFlags : uint32_t {
   kVisibleSetsPresent = 1u,  // cells carry sampled visible sets
+  // Parametric instances took part in the sampling (tessellated coarsely, on their true
+  // surfaces): occluder and visible ids may name parametric clusters, and the section ends with
+  // the parametric candidate list, the parametric clusters every instance of which took part. A
+  // listed cluster absent from a visible set was not seen; any other parametric cluster (none,
+  // without the flag) counts as always visible.
+  kParametricCandidates = 2u,
 };
 
 struct VisibilityHeader {
@@ -48,7 +55,8 @@ struct VisibilityHeader {
   uint32_t solid_cells;        // grid cells dropped as inside solid geometry
   uint32_t flags;              // VisibilityFlags; unknown bits are rejected
   uint64_t candidate_triangles;  // triangles of the candidate front
-  uint64_t reserved[2];        // 0
+  uint64_t parametric_candidate_count;  // uint32 entries after the visible ids (flag bit 1)
+  uint64_t reserved;           // 0
 };
 static_assert(sizeof(VisibilityHeader) == 128);
 
@@ -85,6 +93,8 @@ struct VisibilityData {
   uint64_t rays_cast = 0;
   uint32_t solid_cells = 0;
   bool visible_sets = false;
+  bool parametric_occluders = false;       // kParametricCandidates
+  std::vector<uint32_t> parametric_candidates;  // strictly ascending; only with the flag
   std::vector<VisibilityCell> cells;  // strictly increasing grid_index
 };
 
@@ -116,6 +126,8 @@ class VisibilityView {
   const pkg::VisibilityCellRecord* cellAt(const glm::dvec3& p) const { return cell(gridIndexAt(p)); }
   std::span<const uint32_t> occluders(const pkg::VisibilityCellRecord& cell) const;
   std::span<const uint32_t> visible(const pkg::VisibilityCellRecord& cell) const;
+  // The parametric clusters whose every instance was sampled (empty without the flag).
+  std::span<const uint32_t> parametricCandidates() const { return parametric_candidate_ids_; }
   // Average occluder set size over stored cells (0 when none).
   double averageOccluders() const;
 
@@ -124,6 +136,7 @@ class VisibilityView {
   std::span<const pkg::VisibilityCellRecord> cells_;
   std::span<const uint32_t> occluder_ids_;
   std::span<const uint32_t> visible_ids_;
+  std::span<const uint32_t> parametric_candidate_ids_;
 };
 
 }  // namespace tw

@@ -21,9 +21,13 @@ bool isMesh(const pkg::ClusterRecord& r) {
 
 }  // namespace
 
-PvsMapping::PvsMapping(const PackageView& view, uint32_t candidate_level)
+PvsMapping::PvsMapping(const PackageView& view, uint32_t candidate_level,
+                       std::span<const uint32_t> parametric_candidates)
     : view_(&view), candidate_level_(candidate_level) {
   const auto clusters = view.clusters();
+  parametric_candidate_.assign(clusters.size(), 0);
+  for (uint32_t id : parametric_candidates)
+    if (id < clusters.size() && !isMesh(clusters[id])) parametric_candidate_[id] = 1;
   const auto groups = view.groups();
   groups_descending_.resize(groups.size());
   std::iota(groups_descending_.begin(), groups_descending_.end(), 0u);
@@ -47,14 +51,20 @@ void PvsMapping::flags(std::span<const uint32_t> visible_candidates,
   const auto groups = view_->groups();
   const uint32_t v = candidate_level_;
   out.assign(clusters.size(), 0);
+  // Parametric clusters that were not candidates are always drawn.
   for (uint32_t c = 0; c < clusters.size(); ++c)
-    if (!isMesh(clusters[c])) out[c] = 1;  // parametric: never candidates, always drawn
+    if (!isMesh(clusters[c]) && !parametric_candidate_[c]) out[c] = 1;
 
-  // Front clusters: mesh, level <= V, root or simplified by a group at or above V.
+  // Front clusters: mesh, level <= V, root or simplified by a group at or above V; parametric
+  // candidates stand for themselves.
   for (uint32_t id : visible_candidates) {
     if (id >= clusters.size()) continue;
     const pkg::ClusterRecord& r = clusters[id];
-    if (!isMesh(r) || r.level > v) continue;
+    if (!isMesh(r)) {
+      out[id] = 1;  // a candidate stands for itself; any other parametric cluster is 1 already
+      continue;
+    }
+    if (r.level > v) continue;
     if (r.parent_group != pkg::kNone && groups[r.parent_group].level < v) continue;
     out[id] = 1;
   }

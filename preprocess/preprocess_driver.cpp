@@ -150,6 +150,7 @@ VisibilitySummary addVisibility(const std::filesystem::path& path,
   VisibilityBuildOptions build;
   build.cells.cell_size_m = options.view_cell_size_m;
   build.sampling.rays_per_cell = options.visibility_rays;
+  build.parametric_candidates = options.parametric_occluders;
   build.progress = options.progress;
   VisibilityBuildReport built;
   std::vector<uint8_t> bytes;
@@ -161,6 +162,12 @@ VisibilitySummary addVisibility(const std::filesystem::path& path,
   summary.ran = true;
   summary.candidate_level = built.candidate_level;
   summary.candidate_triangles = built.candidate_triangles;
+  summary.parametric_clusters = built.parametric_clusters;
+  summary.parametric_candidates = built.parametric_candidates;
+  summary.parametric_triangles = built.parametric_triangles;
+  summary.parametric_instances = built.parametric_instances;
+  summary.parametric_instances_total = built.parametric_instances_total;
+  summary.parametric_min_width_m = built.parametric_min_width_m;
   summary.cell_size_m = built.cell_size_m;
   summary.free_cells = built.free_cells;
   summary.solid_cells = built.solid_cells;

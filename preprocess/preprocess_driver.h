@@ -48,6 +48,7 @@ struct PreprocessOptions {
   bool visibility = false;
   uint32_t visibility_rays = 1024;  // rays per view cell
   double view_cell_size_m = 0.0;    // 0: chosen from the bounds (view_cells.h)
+  bool parametric_occluders = true;  // parametric clusters are candidates (visibility_build.h)
 };
 
 // What the visibility stage built (all zero when it was off or found no mesh clusters).
@@ -55,6 +56,12 @@ struct VisibilitySummary {
   bool ran = false;
   uint32_t candidate_level = 0;
   uint64_t candidate_triangles = 0;
+  uint64_t parametric_clusters = 0;    // parametric clusters sampled (some instance taken)
+  uint64_t parametric_candidates = 0;  // of those, every instance taken
+  uint64_t parametric_instances = 0;   // instances taken, the widest first
+  uint64_t parametric_instances_total = 0;
+  float parametric_min_width_m = 0.0f;  // narrowest instance taken
+  uint64_t parametric_triangles = 0;   // their coarse tessellation
   double cell_size_m = 0.0;
   uint32_t free_cells = 0;
   uint32_t solid_cells = 0;

@@ -436,13 +436,19 @@ void Walkthrough::drawWithHzb(const glm::dvec3& eye, std::span<const uint32_t> d
 void Walkthrough::drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
                                  const std::vector<uint32_t>& draw_list, FrameStats& stats) {
   const std::vector<uint32_t>* list = &draw_list;
+  const std::vector<uint32_t>* parametric = &last_parametric_;
   if (mode == OcclusionMode::Pvs) {
     culler_->filterPvs(eye, draw_list, drawn_, stats);
     list = &drawn_;
+    // Parametric clusters the visible set does not name (when they were candidates).
+    FrameStats parametric_stats;
+    culler_->filterPvs(eye, last_parametric_, drawn_parametric_, parametric_stats);
+    stats.occlusion_culled += parametric_stats.occlusion_culled;
+    parametric = &drawn_parametric_;
   }
   appendItems(*list, eye, items_);
   renderer_->draw(*pool_, items_);
-  drawParametrics(last_parametric_, &stats);
+  drawParametrics(*parametric, &stats);
   full_order_.assign(draw_list.begin(), draw_list.end());
   full_order_pass1_ = full_order_.size();
 }

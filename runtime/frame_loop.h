@@ -169,6 +169,7 @@ class Walkthrough {
   std::vector<DrawItem> ghost_items_;
   size_t full_order_pass1_ = 0;  // hzb: parametrics were drawn after this many of full_order_
   std::vector<uint32_t> pass1_, rest_, pass2_, drawn_;  // scratch of the occlusion modes
+  std::vector<uint32_t> drawn_parametric_;              // pvs: parametric clusters kept
   std::vector<uint32_t> full_order_;  // last frame's whole cut, in the order it was drawn
   glm::dvec3 last_eye_{0.0};          // package frame
   double near_reach_m_ = 0.0;         // this frame's Camera::nearPlaneReach

@@ -61,7 +61,8 @@ OcclusionCuller::OcclusionCuller(const PackageView& view) : view_(&view) {
   visibility_ = VisibilityView::parse(view.visibility(), view.fileName(), section.offset,
                                       view.clusters().size());
   if (!visibility_.empty())
-    pvs_ = std::make_unique<PvsMapping>(view, visibility_.header().candidate_level);
+    pvs_ = std::make_unique<PvsMapping>(view, visibility_.header().candidate_level,
+                                        visibility_.parametricCandidates());
   last_visible_.assign(view.clusters().size(), 0);
 }
 
@@ -125,12 +126,19 @@ void OcclusionCuller::splitByLastVisible(const glm::dvec3& eye, std::span<const 
   const pkg::VisibilityCellRecord* cell = promote ? here : nullptr;
   if (cell && cell->grid_index != occluder_cell_) {
     pvs_->flags(visibility_.occluders(*cell), occluder_flags_);
+    // The mapping keeps every parametric cluster that is not a listed candidate; as occluders
+    // only those the set names count (none for sections without parametric occluders).
+    const auto clusters = view_->clusters();
+    for (uint32_t c = 0; c < clusters.size(); ++c)
+      if (clusters[c].kind == uint8_t(pkg::ClusterKind::Parametric)) occluder_flags_[c] = 0;
+    if (visibility_.header().flags & pkg::kParametricCandidates)
+      for (uint32_t id : visibility_.occluders(*cell))
+        if (clusters[id].kind == uint8_t(pkg::ClusterKind::Parametric)) occluder_flags_[id] = 1;
     occluder_cell_ = cell->grid_index;
   }
   uint32_t promoted = 0;
   for (uint32_t c : cut) {
-    const bool occluder = cell && occluder_flags_[c] && view_->clusters()[c].kind ==
-                                                            uint8_t(pkg::ClusterKind::Mesh);
+    const bool occluder = cell && occluder_flags_[c];
     promoted += occluder && !last_visible_[c];
     (last_visible_[c] || occluder ? pass1 : rest).push_back(c);
   }

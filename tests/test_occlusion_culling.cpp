@@ -347,6 +347,98 @@ TEST_F(OcclusionCulling, PvsFiltersTheCutInsideAStoredCell) {
   EXPECT_GT(coarse_first.occlusion_culled, 0u);
 }
 
+// The wall as a parametric box, a floor in front of it, the balls and a row of parametric pipes
+// behind it, built by
+// the preprocessor with its own visibility stage, with and without parametric candidates.
+fs::path parametricWallPackage(const fs::path& dir, bool parametric_occluders) {
+  const fs::path scene = dir / "parametric_wall.tws";
+  {
+    TwsWriter writer(scene);
+    writer.onLayer(0, {"scene", 0xff808080u});
+    SceneObject wall;
+    wall.info.id = 0;
+    wall.info.name = "wall";
+    wall.info.transform.origin = glm::dvec3(0.0, 0.0, 6.0);
+    wall.geometry = Primitive{Box{glm::vec3(0.2f, 12.0f, 6.0f)}};
+    writer.onObject(wall);
+    SceneObject floor;  // in front of the wall, so the view cells reach the camera
+    floor.info.id = 1;
+    floor.info.name = "floor";
+    floor.info.transform.origin = glm::dvec3(-8.5, 0.0, -0.25);
+    floor.geometry = test::subdividedBox(glm::vec3(7.5f, 12.0f, 0.25f), 4);
+    writer.onObject(floor);
+    uint32_t id = 2;
+    for (uint32_t ix = 0; ix < kBallsX; ++ix)
+      for (uint32_t iy = 0; iy < kBallsY; ++iy) {
+        SceneObject ball;
+        ball.info.id = id;
+        ball.info.name = "ball " + std::to_string(id++);
+        ball.info.transform.origin = glm::dvec3(6.0 + 2.0 * ix, -7.5 + 3.0 * iy, 5.5);
+        ball.geometry = sphere(0.6f, 12, 16);
+        writer.onObject(ball);
+      }
+    for (uint32_t iy = 0; iy < 6; ++iy) {
+      SceneObject pipe;  // vertical, 4 m tall, from z = 2
+      pipe.info.id = id;
+      pipe.info.name = "pipe " + std::to_string(id++);
+      pipe.info.transform.origin = glm::dvec3(4.0, -7.5 + 3.0 * iy, 2.0);
+      pipe.geometry = Primitive{Cylinder{0.15f, 4.0f, true}};
+      writer.onObject(pipe);
+    }
+    writer.finish();
+  }
+  const fs::path out = dir / (parametric_occluders ? "with.twk" : "without.twk");
+  PreprocessOptions options;
+  options.inputs = {scene};
+  options.output = out;
+  options.visibility = true;
+  options.visibility_rays = 512;
+  options.view_cell_size_m = 4.0;
+  options.parametric_occluders = parametric_occluders;
+  runPreprocess(options);
+  return out;
+}
+
+// With parametric candidates, the visible set seen from in front of a parametric wall holds the
+// wall alone: pvs drops the balls and pipes behind it (losing no pixel), and hzb's first frame
+// draws the wall as the cell's occluder. Without them the rays went through the wall: pvs keeps
+// the balls they reached and every parametric cluster.
+TEST_F(OcclusionCulling, ParametricWallIsAnOccluderOfItsViewCells) {
+  const Camera front = lookingAt(kFront, kTarget);
+  const fs::path dir = test::scratchDir();
+  const fs::path with = parametricWallPackage(dir, true);
+  const fs::path without = parametricWallPackage(dir, false);
+
+  Walkthrough off(with, smallOptions(OcclusionMode::Off));
+  const FrameStats off_stats = settle(off, front);
+  EXPECT_GE(off_stats.parametric_clusters_drawn, 2u) << "the wall and the pipes";
+
+  Walkthrough pvs(with, smallOptions(OcclusionMode::Pvs));
+  const FrameStats pvs_stats = settle(pvs, front);
+  ASSERT_GE(pvs_stats.view_cell, 0);
+  EXPECT_LT(pvs_stats.triangles_drawn, off_stats.triangles_drawn) << "the balls are behind the wall";
+  EXPECT_EQ(pvs_stats.parametric_clusters_drawn, 1u) << "the wall's cluster";
+  EXPECT_EQ(lostPixels(pvs), 0u);
+
+  Walkthrough pvs_without(without, smallOptions(OcclusionMode::Pvs));
+  const FrameStats without_stats = settle(pvs_without, front);
+  ASSERT_GE(without_stats.view_cell, 0);
+  EXPECT_GT(without_stats.triangles_drawn, pvs_stats.triangles_drawn) << "rays reached balls";
+  EXPECT_EQ(without_stats.parametric_clusters_drawn, off_stats.parametric_clusters_drawn);
+
+  // hzb, first frame after a mode switch: the wall (the cell's occluder) makes pass 1 alone and
+  // hides the balls' clusters.
+  Walkthrough hzb(with, smallOptions(OcclusionMode::Hzb));
+  settle(hzb, front);
+  hzb.setOcclusion(OcclusionMode::Off);
+  hzb.setOcclusion(OcclusionMode::Hzb);
+  const FrameStats first = hzb.renderFrame(front, 0.0);
+  EXPECT_GE(first.occluders_drawn, 1u);
+  EXPECT_EQ(first.pass1_clusters, first.occluders_drawn);
+  EXPECT_GT(first.occlusion_culled, 0u);
+  EXPECT_EQ(lostPixels(hzb), 0u);
+}
+
 TEST_F(OcclusionCulling, SwitchingModesAtRunTime) {
   Walkthrough walk(wallPackage(), smallOptions(OcclusionMode::Hzb));
   const Camera front = lookingAt(kFront, kTarget);

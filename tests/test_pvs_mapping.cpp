@@ -132,7 +132,7 @@ TEST(PvsMapping, WholeFrontMakesEveryClusterVisible) {
   for (uint32_t level = 0; level < view.header().level_count; ++level) {
     const DagFront front = dagFront(view, level);
     ASSERT_FALSE(front.clusters.empty());
-    PvsMapping mapping(view, level);
+    PvsMapping mapping(view, level, {});
     mapping.flags(front.clusters, flags);
     ASSERT_EQ(flags.size(), view.clusters().size());
     const std::vector<uint8_t> dropped = unreachable(view, level);
@@ -150,7 +150,7 @@ TEST(PvsMapping, EmptySetLeavesOnlyParametricClusters) {
   const PackageView& view = package();
   std::vector<uint8_t> flags;
   for (uint32_t level = 0; level < view.header().level_count; ++level) {
-    PvsMapping mapping(view, level);
+    PvsMapping mapping(view, level, {});
     mapping.flags({}, flags);
     for (uint32_t c = 0; c < flags.size(); ++c)
       EXPECT_EQ(flags[c], isMesh(view.clusters()[c]) ? 0 : 1) << "level " << level << " " << c;
@@ -191,7 +191,7 @@ TEST(PvsMapping, OneFrontClusterShowsItsDescendantsAndAncestorsOnly) {
     }
   ASSERT_NE(chosen, pkg::kNone);
   std::vector<uint8_t> flags;
-  PvsMapping mapping(view, level);
+  PvsMapping mapping(view, level, {});
   mapping.flags(std::vector<uint32_t>{chosen}, flags);
   EXPECT_EQ(flags[chosen], 1);
 
@@ -252,7 +252,7 @@ TEST(PvsMapping, RandomSetsAgreeWithBruteForceAtEveryLevel) {
   std::mt19937 rng(7);
   std::vector<uint8_t> flags;
   for (uint32_t level = 0; level < view.header().level_count; ++level) {
-    PvsMapping mapping(view, level);  // one mapping, reused: no state may leak between calls
+    PvsMapping mapping(view, level, {});  // one mapping, reused: no state may leak between calls
     const DagFront front = dagFront(view, level);
     for (int trial = 0; trial < 6; ++trial) {
       std::vector<uint32_t> set;

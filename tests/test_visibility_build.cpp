@@ -14,6 +14,7 @@
 #include "embree_scene.h"
 #include "package_view.h"
 #include "preprocess_driver.h"
+#include "pvs_mapping.h"
 #include "test_support.h"
 #include "tws_writer.h"
 #include "visibility_build.h"
@@ -169,8 +170,8 @@ TEST(VisibilitySampling, RejectsUncommittedSceneAndZeroRays) {
   EXPECT_THROW(sampleVisibility(scene, grid, options), std::invalid_argument);
 }
 
-// A deck (an 80 x 80 x 1 m slab), four 6 m blocks on it and a pipe (parametric: never a
-// candidate), far from the datum.
+// A deck (an 80 x 80 x 1 m slab), four 6 m blocks on it and a pipe (parametric), far from the
+// datum.
 fs::path writeScene(const fs::path& dir) {
   fs::path path = dir / "deck.tws";
   TwsWriter writer(path);
@@ -254,14 +255,20 @@ TEST(VisibilityBuild, SectionIdsAreFrontClusters) {
   EXPECT_EQ(h.flags & pkg::kVisibleSetsPresent, pkg::kVisibleSetsPresent);
   EXPECT_NEAR(vis.averageOccluders(), report.average_occluders, 1e-9);
 
+  EXPECT_EQ(h.flags & pkg::kParametricCandidates, pkg::kParametricCandidates);
+  EXPECT_EQ(report.parametric_candidates, 1u) << "the pipe";
+  EXPECT_GT(report.parametric_triangles, 0u);
+
   const DagFront front = dagFront(view, h.candidate_level);
   EXPECT_EQ(front.clusters.size(), report.candidate_clusters);
+  auto candidate = [&](uint32_t id) {
+    return std::binary_search(front.clusters.begin(), front.clusters.end(), id) ||
+           view.clusters()[id].kind == uint8_t(pkg::ClusterKind::Parametric);
+  };
   uint32_t with_occluders = 0;
   for (const pkg::VisibilityCellRecord& cell : vis.cells()) {
-    for (uint32_t id : vis.occluders(cell))
-      EXPECT_TRUE(std::binary_search(front.clusters.begin(), front.clusters.end(), id)) << id;
-    for (uint32_t id : vis.visible(cell))
-      EXPECT_TRUE(std::binary_search(front.clusters.begin(), front.clusters.end(), id)) << id;
+    for (uint32_t id : vis.occluders(cell)) EXPECT_TRUE(candidate(id)) << id;
+    for (uint32_t id : vis.visible(cell)) EXPECT_TRUE(candidate(id)) << id;
     with_occluders += cell.occluder_count > 0;
     EXPECT_LE(cell.occluder_coverage, cell.hit_fraction + 1e-6f);
   }
@@ -370,6 +377,136 @@ TEST(VisibilityBuild, DamagedPackageGivesFormatError) {
       },
       100);
   EXPECT_GT(rejected, 250);  // the truncations at least
+}
+
+// A mesh block behind a parametric wall (a box primitive 2 m thick): seen from the open side,
+// the wall is the occluder and the block is not in the visible set; without parametric
+// candidates the rays pass through the wall and the block is seen.
+TEST(VisibilityBuild, ParametricWallOccludesWhatIsBehindIt) {
+  const fs::path dir = test::scratchDir();
+  const fs::path input = dir / "wall.tws";
+  {
+    TwsWriter writer(input);
+    writer.onLayer(0, {"structure", 0xff336699u});
+    SceneObject block;
+    block.info.id = 0;
+    block.info.name = "block";
+    block.info.transform.origin = {-30.0, 0.0, 0.0};
+    block.geometry = test::subdividedBox(glm::vec3(4.0f), 4);
+    writer.onObject(block);
+    SceneObject floor;  // in front of the wall: a second mesh object the open side sees
+    floor.info.id = 1;
+    floor.info.name = "floor";
+    floor.info.transform.origin = {20.0, 0.0, -21.0};
+    floor.geometry = test::subdividedBox(glm::vec3(19.0f, 20.0f, 1.0f), 4);
+    writer.onObject(floor);
+    SceneObject wall;
+    wall.info.id = 2;
+    wall.info.name = "wall";
+    wall.info.transform.origin = {0.0, 0.0, 0.0};
+    wall.geometry = Primitive{Box{glm::vec3(1.0f, 200.0f, 200.0f)}};
+    writer.onObject(wall);
+    SceneObject valve;  // a small box on the open side, in the wall's parametric cluster
+    valve.info.id = 3;
+    valve.info.name = "valve";
+    valve.info.transform.origin = {10.0, 5.0, -10.0};
+    valve.geometry = Primitive{Box{glm::vec3(0.05f)}};
+    writer.onObject(valve);
+    writer.finish();
+  }
+  PreprocessOptions options = optionsFor(input, dir / "wall.twk");
+  options.visibility = false;
+  runPreprocess(options);
+  const PackageView view = PackageView::open(options.output);
+  const auto clusters = view.clusters();
+  uint32_t wall = UINT32_MAX;
+  std::vector<uint32_t> block;
+  for (uint32_t c = 0; c < clusters.size(); ++c) {
+    if (clusters[c].kind == uint8_t(pkg::ClusterKind::Parametric)) wall = c;
+    else if (clusters[c].level == 0 && view.objects()[clusters[c].object_min].id == 0)
+      block.push_back(c);
+  }
+  ASSERT_NE(wall, UINT32_MAX);
+  ASSERT_FALSE(block.empty());
+
+  VisibilityBuildOptions with;
+  with.sampling.rays_per_cell = 512;
+  with.cells.cell_size_m = 8.0;
+  with.max_candidate_triangles = 1u << 30;  // level 0: the block's own clusters
+  VisibilityBuildOptions without = with;
+  without.parametric_candidates = false;
+  const std::vector<uint8_t> with_bytes = buildVisibilitySection(view, with);
+  const std::vector<uint8_t> without_bytes = buildVisibilitySection(view, without);
+  const VisibilityView a = VisibilityView::parse(with_bytes, "with", 0, clusters.size());
+  const VisibilityView b = VisibilityView::parse(without_bytes, "without", 0, clusters.size());
+  ASSERT_FALSE(a.empty());
+  ASSERT_FALSE(b.empty());
+  EXPECT_NE(a.header().flags & pkg::kParametricCandidates, 0u);
+  EXPECT_EQ(b.header().flags & pkg::kParametricCandidates, 0u);
+
+  // A camera on the open side, 20 m from the wall.
+  const glm::dvec3 eye = glm::dvec3(20.0, 0.0, 0.0) - view.origin();
+  const pkg::VisibilityCellRecord* ca = a.cellAt(eye);
+  const pkg::VisibilityCellRecord* cb = b.cellAt(eye);
+  ASSERT_NE(ca, nullptr);
+  ASSERT_NE(cb, nullptr);
+  auto contains = [](std::span<const uint32_t> ids, uint32_t id) {
+    return std::find(ids.begin(), ids.end(), id) != ids.end();
+  };
+  auto seesBlock = [&](std::span<const uint32_t> ids) {
+    return std::any_of(block.begin(), block.end(), [&](uint32_t c) { return contains(ids, c); });
+  };
+  EXPECT_TRUE(contains(a.occluders(*ca), wall));
+  EXPECT_EQ(a.occluders(*ca)[0], wall) << "the wall covers half the sphere of directions";
+  EXPECT_TRUE(contains(a.visible(*ca), wall));
+  EXPECT_FALSE(seesBlock(a.visible(*ca)));
+  EXPECT_TRUE(seesBlock(b.visible(*cb)));
+  EXPECT_FALSE(contains(b.visible(*cb), wall));
+
+  // The budget takes the widest instances first: none fit in 11 triangles (a box has 12), and
+  // then the section does not claim parametric occluders; 12 take the wall but not the valve,
+  // so the cluster is sampled but not listed (it stays always visible).
+  VisibilityBuildOptions tight = with;
+  tight.max_parametric_triangles = 11;
+  VisibilityBuildReport tight_report;
+  const std::vector<uint8_t> tight_bytes = buildVisibilitySection(view, tight, &tight_report);
+  EXPECT_EQ(tight_report.parametric_instances, 0u);
+  EXPECT_EQ(tight_report.parametric_instances_total, 2u);
+  EXPECT_EQ(VisibilityView::parse(tight_bytes, "tight", 0, clusters.size()).header().flags &
+                pkg::kParametricCandidates,
+            0u);
+  tight.max_parametric_triangles = 12;
+  const std::vector<uint8_t> partial_bytes = buildVisibilitySection(view, tight, &tight_report);
+  EXPECT_EQ(tight_report.parametric_instances, 1u);
+  EXPECT_EQ(tight_report.parametric_triangles, 12u);
+  EXPECT_EQ(tight_report.parametric_clusters, 1u);
+  EXPECT_EQ(tight_report.parametric_candidates, 0u);
+  EXPECT_FLOAT_EQ(tight_report.parametric_min_width_m, 400.0f) << "the wall's second edge";
+  const VisibilityView partial =
+      VisibilityView::parse(partial_bytes, "partial", 0, clusters.size());
+  EXPECT_NE(partial.header().flags & pkg::kParametricCandidates, 0u);
+  EXPECT_TRUE(partial.parametricCandidates().empty());
+  EXPECT_TRUE(std::find(partial.occluders(*partial.cellAt(eye)).begin(),
+                        partial.occluders(*partial.cellAt(eye)).end(),
+                        wall) != partial.occluders(*partial.cellAt(eye)).end())
+      << "the wall still stops rays";
+
+  // The wall (its cluster's one instance sampled) is a listed candidate; the mapping keeps it
+  // where the set names it and drops it where it does not, and keeps every parametric cluster
+  // for a section without the list.
+  const auto listed = a.parametricCandidates();
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0], wall);
+  PvsMapping mapping(view, a.header().candidate_level, listed);
+  std::vector<uint8_t> flags;
+  mapping.flags(a.visible(*ca), flags);
+  EXPECT_EQ(flags[wall], 1);
+  EXPECT_EQ(flags[block[0]], 0);
+  mapping.flags({}, flags);
+  EXPECT_EQ(flags[wall], 0);
+  PvsMapping legacy(view, b.header().candidate_level, b.parametricCandidates());
+  legacy.flags({}, flags);
+  EXPECT_EQ(flags[wall], 1);
 }
 
 TEST(VisibilityBuild, PackageWithoutMeshClustersGivesNoSection) {

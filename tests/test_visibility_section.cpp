@@ -125,6 +125,22 @@ TEST(VisibilitySection, RoundTrip) {
   EXPECT_EQ(view.cell(UINT32_MAX), nullptr);
   // Encoding is deterministic.
   EXPECT_EQ(encodeVisibility(d), bytes);
+  EXPECT_TRUE(view.parametricCandidates().empty());
+
+  // Parametric candidates follow the visible ids.
+  VisibilityData p = d;
+  p.parametric_occluders = true;
+  p.parametric_candidates = {3, 8, 9};
+  const std::vector<uint8_t> p_bytes = encodeVisibility(p);
+  EXPECT_EQ(p_bytes.size(), bytes.size() + 12);
+  AlignedBytes pa(p_bytes);
+  const VisibilityView p_view = parseCopy(pa);
+  EXPECT_EQ(p_view.header().flags, uint32_t{pkg::kVisibleSetsPresent | pkg::kParametricCandidates});
+  EXPECT_EQ(p_view.header().parametric_candidate_count, 3u);
+  const auto listed = p_view.parametricCandidates();
+  EXPECT_EQ(std::vector<uint32_t>(listed.begin(), listed.end()), p.parametric_candidates);
+  const auto last_visible = p_view.visible(p_view.cells().back());
+  EXPECT_EQ(std::vector<uint32_t>(last_visible.begin(), last_visible.end()), d.cells.back().visible);
 }
 
 TEST(VisibilitySection, GridLookup) {
@@ -213,6 +229,12 @@ TEST(VisibilitySection, EncodeRejectsDataThatBreaksTheLayout) {
   d = sampleData();
   d.solid_cells = 100;  // + 40 stored > 120
   rejects(d);
+  d = sampleData();
+  d.parametric_candidates = {1};  // without parametric_occluders
+  rejects(d);
+  d.parametric_occluders = true;
+  d.parametric_candidates = {4, 2};
+  rejects(d);
 }
 
 TEST(VisibilitySection, EveryTruncationAndCorruptionIsRejectedCleanly) {
@@ -275,8 +297,16 @@ TEST(VisibilitySection, HandMadeBadInputsNameTheFieldAndOffset) {
       {"unknown flag", [](auto& b) { patch<uint32_t>(b, 100, 5); }, 100, "unknown flags 4"},
       {"visible ids without flag", [](auto& b) { patch<uint32_t>(b, 100, 0); }, 72,
        "visible-sets flag is off"},
-      {"reserved", [](auto& b) { patch<uint64_t>(b, 120, 1); }, 112,
-       "reserved header fields are not zero"},
+      {"reserved", [](auto& b) { patch<uint64_t>(b, 120, 1); }, 120,
+       "reserved header field is not zero"},
+      {"parametric list without flag", [](auto& b) { patch<uint64_t>(b, 112, 1); }, 112,
+       "parametric flag is off"},
+      {"parametric list past the end",
+       [](auto& b) {
+         patch<uint32_t>(b, 100, pkg::kVisibleSetsPresent | pkg::kParametricCandidates);
+         patch<uint64_t>(b, 112, 1);
+       },
+       112, "1 parametric candidate ids need more than the 0 bytes"},
       {"cells past the end", [](auto& b) { patch<uint32_t>(b, 28, 100); }, 28,
        "100 cell records need more than the"},
       {"occluder ids past the end", [](auto& b) { patch<uint64_t>(b, 64, uint64_t{1} << 62); }, 64,
@@ -284,7 +314,7 @@ TEST(VisibilitySection, HandMadeBadInputsNameTheFieldAndOffset) {
       {"visible ids past the end", [](auto& b) { patch<uint64_t>(b, 72, ~uint64_t{0}); }, 72,
        "visible ids need more than the"},
       {"trailing bytes", [](auto& b) { b.insert(b.end(), 8, 0); }, good.size(),
-       "8 trailing bytes after the visible ids"},
+       "8 trailing bytes after the last ids"},
       {"occluder id out of range", [&](auto& b) { patch<uint32_t>(b, occluders_at + 8, 200); },
        occluders_at + 8, "occluder id 200 is out of range (200 clusters)"},
       {"visible id out of range", [&](auto& b) { patch<uint32_t>(b, visible_at, 999); }, visible_at,
@@ -325,6 +355,37 @@ TEST(VisibilitySection, HandMadeBadInputsNameTheFieldAndOffset) {
       EXPECT_NE(e.reason().find("visibility"), std::string::npos) << c.name << ": " << e.what();
     }
   }
+}
+
+TEST(VisibilitySection, ParametricCandidatesOutOfRangeOrOrderAreRejected) {
+  VisibilityData p = sampleData();
+  p.parametric_occluders = true;
+  p.parametric_candidates = {3, 8, 9};
+  const std::vector<uint8_t> good = encodeVisibility(p);
+  const size_t list_at = good.size() - 12;
+  auto rejected = [&](std::vector<uint8_t> bytes, uint64_t clusters, size_t offset,
+                      const char* reason) {
+    AlignedBytes a(bytes);
+    try {
+      parseCopy(a, clusters);
+      ADD_FAILURE() << reason << ": accepted";
+    } catch (const FormatError& e) {
+      EXPECT_EQ(e.position(), kSectionOffset + offset) << e.what();
+      EXPECT_NE(e.reason().find(reason), std::string::npos) << e.what();
+    }
+  };
+  {
+    std::vector<uint8_t> copy = good;
+    AlignedBytes ok(copy);
+    EXPECT_NO_THROW(parseCopy(ok, 200));
+  }
+  std::vector<uint8_t> bytes = good;
+  std::memcpy(bytes.data() + list_at + 4, "\x02\0\0\0", 4);  // 3, 2, 9
+  rejected(bytes, 200, list_at + 4, "parametric candidates are not strictly ascending");
+  std::vector<uint8_t> big = good;
+  const uint32_t past = 500;
+  std::memcpy(big.data() + list_at + 8, &past, 4);
+  rejected(big, 200, list_at + 8, "parametric candidate 500 is out of range (200 clusters)");
 }
 
 TEST(VisibilitySection, VisibleIdsOutOfOrderAndMisalignmentAreRejected) {
@@ -564,6 +625,23 @@ TEST(PackageRewrite, FailuresLeaveTheOriginalUntouched) {
   bad = good;
   bad.candidate_level = view.header().level_count;
   rejectedWith(bad, "candidate level");
+  bad = good;
+  bad.parametric_occluders = true;
+  bad.parametric_candidates = {good.cells[0].occluders[0]};  // a mesh cluster
+  rejectedWith(bad, "is not a parametric cluster");
+  // With parametric candidates declared, the parametric occluder is accepted.
+  VisibilityData parametric_ok = good;
+  parametric_ok.parametric_occluders = true;
+  parametric_ok.parametric_candidates = {parametric};
+  parametric_ok.cells[4].occluders.push_back(parametric);
+  replacePackageSection(file, pkg::SectionType::Visibility, encodeVisibility(parametric_ok));
+  {
+    const PackageView patched = PackageView::open(file, PackageView::Verify::All);
+    const VisibilityView& v = patched.visibilityCells();
+    EXPECT_NE(v.header().flags & pkg::kParametricCandidates, 0u);
+    EXPECT_EQ(v.occluders(v.cells()[4]).back(), parametric);
+  }
+  test::writeFile(file, before);
 
   // No place to write the temporary file (root ignores permissions, so block the name instead).
   fs::create_directory(file.string() + ".tmp");
@@ -636,7 +714,8 @@ TEST(PackageRewrite, ViewRejectsAPatchedVisibilitySectionAtItsOffset) {
 
 // Random damage inside the visibility section of a package, with the checksums resealed so that
 // only the section's own rules stand between the bytes and the runtime: every open either succeeds
-// with a view whose ids are all mesh clusters or throws a FormatError naming the file.
+// with a view whose ids are all candidates (mesh clusters, or parametric ones when the flag says
+// so) or throws a FormatError naming the file.
 TEST(PackageRewrite, ResealedDamageInTheSectionIsRejectedCleanly) {
   const fs::path file = test::scratchDir() / "damaged-visibility.twk";
   fs::copy_file(smallPackage(), file);
@@ -666,11 +745,16 @@ TEST(PackageRewrite, ResealedDamageInTheSectionIsRejectedCleanly) {
     try {
       const PackageView view = PackageView::open(file);
       const VisibilityView& v = view.visibilityCells();
+      const bool parametric =
+          !v.empty() && (v.header().flags & pkg::kParametricCandidates) != 0;
+      auto candidateKind = [&](uint32_t id) {
+        const uint8_t kind = view.clusters()[id].kind;
+        return kind == uint8_t(pkg::ClusterKind::Mesh) ||
+               (parametric && kind == uint8_t(pkg::ClusterKind::Parametric));
+      };
       for (const VisibilityCellRecord& c : v.cells()) {
-        for (uint32_t id : v.occluders(c))
-          ASSERT_EQ(view.clusters()[id].kind, uint8_t(pkg::ClusterKind::Mesh));
-        for (uint32_t id : v.visible(c))
-          ASSERT_EQ(view.clusters()[id].kind, uint8_t(pkg::ClusterKind::Mesh));
+        for (uint32_t id : v.occluders(c)) ASSERT_TRUE(candidateKind(id)) << id;
+        for (uint32_t id : v.visible(c)) ASSERT_TRUE(candidateKind(id)) << id;
       }
     } catch (const FormatError& error) {
       ++rejected;

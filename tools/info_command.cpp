@@ -195,6 +195,7 @@ nlohmann::json packageToJson(const PackageSummary& s) {
                      {"candidate_level", v.candidate_level},
                      {"candidate_triangles", v.candidate_triangles},
                      {"visible_sets", v.visible_sets},
+                     {"parametric_candidates", v.parametric_candidates},
                      {"occluder_ids", v.occluder_ids},
                      {"visible_ids", v.visible_ids},
                      {"average_occluders", v.average_occluders},
@@ -279,8 +280,9 @@ void printPackage(const PackageSummary& s, double seconds) {
     std::printf("visibility  %llu cells (%llu solid) in a %u x %u x %u grid of %.3g m cells, %s\n",
                 ull(v.cells), ull(v.solid_cells), v.grid_dims.x, v.grid_dims.y, v.grid_dims.z,
                 v.cell_size_m, mib(v.bytes).c_str());
-    std::printf("  rays %llu (%u per cell); candidates: level %u front, %llu triangles\n",
-                ull(v.rays_cast), v.rays_per_cell, v.candidate_level, ull(v.candidate_triangles));
+    std::printf("  rays %llu (%u per cell); candidates: level %u front, %llu triangles%s\n",
+                ull(v.rays_cast), v.rays_per_cell, v.candidate_level, ull(v.candidate_triangles),
+                v.parametric_candidates ? ", and the parametric clusters" : "");
     std::printf("  occluders %.2f per cell (covering %.1f%% of rays)", v.average_occluders,
                 100.0 * v.average_coverage);
     if (v.visible_sets)

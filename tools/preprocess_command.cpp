@@ -25,6 +25,7 @@ struct PreprocessArgs {
   std::string visibility = "on";
   uint32_t visibility_rays = 1024;
   double view_cell_size_m = 0.0;
+  std::string parametric_occluders = "on";
   std::vector<std::string> exclude_layers;
   std::string db;
 };
@@ -72,6 +73,15 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
                 v.candidate_level, static_cast<unsigned long long>(v.candidate_triangles),
                 v.average_occluders, v.average_visible,
                 static_cast<unsigned long long>(v.section_bytes));
+    if (v.parametric_clusters > 0)
+      std::printf("              parametric: %llu of %llu instances sampled (%.3g m wide and"
+                  " up, %llu triangles) in %llu clusters, %llu of them whole\n",
+                  static_cast<unsigned long long>(v.parametric_instances),
+                  static_cast<unsigned long long>(v.parametric_instances_total),
+                  double(v.parametric_min_width_m),
+                  static_cast<unsigned long long>(v.parametric_triangles),
+                  static_cast<unsigned long long>(v.parametric_clusters),
+                  static_cast<unsigned long long>(v.parametric_candidates));
     std::printf("              decode %.2f s, cells %.2f s, embree %.2f s, rays %.2f s\n",
                 v.decode_s, v.voxelize_s, v.embree_build_s, v.sampling_s);
   }
@@ -110,6 +120,9 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--view-cell-size", args->view_cell_size_m,
                   "View cell edge in metres (default: chosen from the model's size)")
       ->check(CLI::Range(0.0, 1e6));
+  cmd->add_option("--parametric-occluders", args->parametric_occluders,
+                  "Parametric clusters as visibility candidates: on or off (default on)")
+      ->check(CLI::IsMember({"on", "off"}));
   cmd->add_option("--exclude-layer", args->exclude_layers,
                   "Leave the objects of this layer out of the package (repeatable)")
       ->allow_extra_args(false);
@@ -134,6 +147,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.visibility = args->visibility == "on";
     options.visibility_rays = args->visibility_rays;
     options.view_cell_size_m = args->view_cell_size_m;
+    options.parametric_occluders = args->parametric_occluders == "on";
     options.exclude_layers = args->exclude_layers;
     options.database = args->db;
     PreprocessReport report = runPreprocess(options);

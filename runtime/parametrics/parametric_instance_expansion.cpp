@@ -105,8 +105,7 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
                    const glm::vec3& anchor_eye, const Form& f, const OwnedUnitMesh& unit) {
   std::vector<SmoothVertex>& vertices = batch.vertices;
   const UnitMesh& mesh = unit.mesh;
-  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::mat3 linear = instanceLinear(in);
   const uint32_t base = static_cast<uint32_t>(vertices.size());
   const uint32_t vertex_count = mesh.vertex_count;
   if (f.box_frame) {
@@ -205,8 +204,7 @@ void appendLathe(InstanceBatch& batch, LatheScratch& scratch, const pkg::Instanc
       in.profile_count > profile_points.size() - in.profile_first)
     return;
   const auto profile = profile_points.subspan(in.profile_first, in.profile_count);
-  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::mat3 linear = instanceLinear(in);
   const float scale = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
   scratch.simplifier.simplify(profile, profile_tolerance / std::max(scale, 1e-30f), kept);
   const float sweep = in.params[0];
@@ -254,8 +252,7 @@ void appendLathe(InstanceBatch& batch, LatheScratch& scratch, const pkg::Instanc
 void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
                       const glm::vec3& anchor_eye, uint32_t segments) {
   std::vector<SmoothVertex>& vertices = batch.vertices;
-  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::mat3 linear = instanceLinear(in);
   const glm::vec3 origin = anchor_eye + b.origin;
   const float* p = in.params;
   const auto type = static_cast<pkg::PrimitiveType>(in.type);
@@ -310,8 +307,7 @@ void appendTubeRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const
 // plant's orbit 20 % slower (commit 1e7cbea against cff378c, 2026-11-27).
 void appendBeamRibbon(InstanceBatch& batch, const pkg::InstanceRecord& in, const InstanceBounds& b,
                       const glm::vec3& anchor_eye, int axis, uint32_t members) {
-  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::mat3 linear = instanceLinear(in);
   // The canonical box's half sizes mapped: b.size holds them in metres (half times the column's
   // length), so each column is scaled to that length.
   glm::vec3 axes[3];

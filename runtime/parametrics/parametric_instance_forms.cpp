@@ -82,8 +82,7 @@ InstanceBounds boundsOf(const pkg::InstanceRecord& in, std::span<const glm::vec2
   }
   lo -= grow;
   hi += grow;
-  const glm::mat3 linear(in.linear[0], in.linear[1], in.linear[2], in.linear[3], in.linear[4],
-                         in.linear[5], in.linear[6], in.linear[7], in.linear[8]);
+  const glm::mat3 linear = instanceLinear(in);
   const glm::vec3 scale(glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2]));
   const float largest = std::max({scale.x, scale.y, scale.z});
   // Chordal error scales with the largest stretch of the circle's plane (all axes for spheres).

@@ -22,6 +22,7 @@
 
 #include <glm/glm.hpp>
 
+#include "instance_primitive.h"
 #include "package_view.h"
 #include "scene.h"
 
@@ -65,9 +66,6 @@ uint32_t packNormal(const glm::vec3& unit_or_zero);
 // determinant's sign taken out so a mirroring frame keeps normals outward. Not normalized.
 glm::mat3 normalMatrix(const glm::mat3& linear);
 
-// The scene.h primitive an instance record stands for (parameters as in package_format.h).
-Primitive primitiveOf(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points);
-
 // Appends the triangles of every instance of parametric cluster `cluster` at chordal tolerance
 // `tolerance_m`, placed relative to the cluster's anchor. Instances whose parameters
 // tessellate to nothing (invalid) add nothing. `instance_offsets`, when given, receives the first
@@ -93,14 +91,6 @@ struct ParametricMeshInstance {
   double distance_m = 0.0;   // from the eye to the instance's nearest point (bounding sphere)
   FaceCull cull = FaceCull::None;
 };
-
-// The box an instance's primitive fills in its canonical frame: tight for cylinders, cones,
-// spheres, torus segments (their sweep) and boxes, the profile's box swept for extrusions and a
-// full turn's for revolutions; false for unknown types and for parameters that draw nothing
-// (non-positive or non-finite sizes, a torus whose tube reaches its axis, a profile outside the
-// table).
-bool instanceLocalBox(const pkg::InstanceRecord& instance, std::span<const glm::vec2> profile_points,
-                      glm::vec3& lo, glm::vec3& hi);
 
 // The anchor of a parametric cluster: its bounding-sphere centre, package frame metres.
 glm::dvec3 clusterAnchor(const pkg::ClusterRecord& cluster);
