@@ -24,7 +24,7 @@ for occluders in on off; do
   [ -f "$plant-$occluders.twk" ] ||
     $tw preprocess "$plant.tws" -o "$plant-$occluders.twk" --parametric-occluders "$occluders" \
       > "$work/preprocess-$occluders.txt"
-  grep -E "candidates|occluders" "$work/preprocess-$occluders.txt" | sed "s/^/$occluders: /"
+  grep -E "candidates|occluders|parametric:" "$work/preprocess-$occluders.txt" | sed "s/^/$occluders: /"
 done
 for run in $(seq 1 "$runs"); do
   for mode in hzb pvs; do
