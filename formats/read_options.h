@@ -2,6 +2,8 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -17,6 +19,15 @@ struct ReadOptions {
   // Objects of the layers with these names are left out (layer_filter_sink.h); the layer table
   // still lists them.
   std::vector<std::string> exclude_layers;
+  // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
+  // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
+  std::function<void(const std::string&)> warn;
 };
+
+// Reports `message` through options.warn, or on stderr.
+inline void readWarning(const ReadOptions& options, const std::string& message) {
+  if (options.warn) options.warn(message);
+  else std::fprintf(stderr, "warning: %s\n", message.c_str());
+}
 
 }  // namespace tw

@@ -10,6 +10,7 @@
 #include "layer_filter_sink.h"
 #include "obj_reader.h"
 #include "ply_reader.h"
+#include "step_importer.h"
 #include "stl_reader.h"
 #include "tws_reader.h"
 
@@ -24,6 +25,7 @@ SceneFormat sceneFormatOf(const std::filesystem::path& path) {
   if (ext == ".obj") return SceneFormat::Obj;
   if (ext == ".stl") return SceneFormat::Stl;
   if (ext == ".gltf" || ext == ".glb") return SceneFormat::Gltf;
+  if (ext == ".stp" || ext == ".step") return SceneFormat::Step;
   return SceneFormat::Unknown;
 }
 
@@ -34,6 +36,7 @@ std::string_view sceneFormatName(SceneFormat format) {
     case SceneFormat::Obj: return "obj";
     case SceneFormat::Stl: return "stl";
     case SceneFormat::Gltf: return "gltf";
+    case SceneFormat::Step: return "step";
     case SceneFormat::Unknown: break;
   }
   return "unknown";
@@ -52,10 +55,11 @@ void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOpt
     case SceneFormat::Obj: return readObj(path, sink, options);
     case SceneFormat::Stl: return readStl(path, sink, options);
     case SceneFormat::Gltf: return readGltf(path, sink, options);
+    case SceneFormat::Step: return readStep(path, sink, options);
     case SceneFormat::Unknown: break;
   }
   throw FormatError(path.string(),
-                    "unknown file type (expected .tws, .ply, .obj, .stl, .gltf or .glb)");
+                    "unknown file type (expected .tws, .ply, .obj, .stl, .gltf, .glb, .stp or .step)");
 }
 
 }  // namespace tw

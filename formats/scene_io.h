@@ -1,4 +1,5 @@
-// Reading any supported scene file by its extension.
+// Reading any supported scene file by its extension: the streaming mesh readers of formats/ and
+// the CAD importers of formats/importers/ (STEP through OpenCASCADE). Library tw_scene_io.
 #pragma once
 
 #include <filesystem>
@@ -9,10 +10,10 @@
 
 namespace tw {
 
-enum class SceneFormat { Unknown, Tws, Ply, Obj, Stl, Gltf };
+enum class SceneFormat { Unknown, Tws, Ply, Obj, Stl, Gltf, Step };
 
 // The format implied by the file's extension (case-insensitive): .tws, .ply, .obj, .stl,
-// .gltf/.glb.
+// .gltf/.glb, .stp/.step.
 SceneFormat sceneFormatOf(const std::filesystem::path& path);
 std::string_view sceneFormatName(SceneFormat format);
 

@@ -693,6 +693,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     ReadOptions read_options;
     read_options.progress = &sub;
     read_options.exclude_layers = options.exclude_layers;
+    read_options.warn = [](const std::string&) {};  // the survey's reading reported them
     readScene(inputs[i], sink, read_options);
     checkCancelled(options.progress);
     base += fileBytes(inputs[i]);

@@ -382,6 +382,31 @@ std::filesystem::path bunnyPackageForCli() {
 
 // `render` headless: a generated orbit, its path saved and replayed, stats as CSV and JSON, PNG
 // colour and id frames, and the same path replayed from the file gives the same frame count.
+// A STEP assembly as a user brings it: info counts its part instances, the package verifies,
+// and a pick names the part under the pixel by its assembly path.
+TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {
+  auto file = test::sharedDataDir() / "as1-oc-214.stp";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  RunResult info = run("info " + file.string());
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("(step, 441968 bytes)"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("objects     18 (18 parts, 18 with a database key)"),
+            std::string::npos)
+      << info.output;
+  auto twk = test::scratchDir() / "as1.twk";
+  RunResult pre = run("preprocess -q " + file.string() + " -o " + twk.string());
+  ASSERT_EQ(pre.exit_code, 0) << pre.output;
+  RunResult verify = run("verify -q " + twk.string());
+  ASSERT_EQ(verify.exit_code, 0) << verify.output;
+  EXPECT_NE(verify.output.find(": OK:"), std::string::npos) << verify.output;
+  // From in front and above, the image centre falls on the base plate (200 x 150 mm, metres).
+  RunResult pick = run("pick " + twk.string() +
+                       " --eye 0.09,-0.25,0.2 --target 0.09,0.075,0.03 --pixel 640,360");
+  ASSERT_EQ(pick.exit_code, 0) << pick.output;
+  EXPECT_NE(pick.output.find("as1/plate_1"), std::string::npos) << pick.output;
+  EXPECT_NE(pick.output.find("layer       256"), std::string::npos) << pick.output;
+}
+
 TEST(Cli, RenderWritesFramesStatsAndReplaysItsPath) {
   auto package = bunnyPackageForCli();
   auto dir = test::scratchDir();

@@ -10,6 +10,7 @@ packages=(
   libegl-dev libgl-dev libgl1-mesa-dri libegl-mesa0
   libzstd-dev libxxhash-dev libmetis-dev libsqlite3-dev libcli11-dev nlohmann-json3-dev
   libstb-dev libtinygltf-dev libimgui-dev xvfb gnuplot-nox
+  libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-ocaf-dev
 )
 
 missing=()
