@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "progress.h"
+#include "up_axis.h"
 
 namespace tw {
 
@@ -19,6 +20,9 @@ struct ReadOptions {
   // Objects of the layers with these names are left out (layer_filter_sink.h); the layer table
   // still lists them.
   std::vector<std::string> exclude_layers;
+  // The file's up axis (up_axis.h); readScene turns Y-up files Z up. Auto: Y for glTF, Z for
+  // everything else.
+  UpAxis up = UpAxis::Auto;
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;

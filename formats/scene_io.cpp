@@ -42,12 +42,23 @@ std::string_view sceneFormatName(SceneFormat format) {
   return "unknown";
 }
 
+UpAxis fileUpAxis(const std::filesystem::path& path, UpAxis up) {
+  if (up != UpAxis::Auto) return up;
+  return sceneFormatOf(path) == SceneFormat::Gltf ? UpAxis::Y : UpAxis::Z;
+}
+
 void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
   if (!options.exclude_layers.empty()) {
     LayerFilterSink filter(sink, options.exclude_layers);
     ReadOptions unfiltered = options;
     unfiltered.exclude_layers.clear();
     return readScene(path, filter, unfiltered);
+  }
+  if (fileUpAxis(path, options.up) == UpAxis::Y) {
+    UpAxisSink turn(sink);
+    ReadOptions z_up = options;
+    z_up.up = UpAxis::Z;
+    return readScene(path, turn, z_up);
   }
   switch (sceneFormatOf(path)) {
     case SceneFormat::Tws: return readTws(path, sink, options);

@@ -17,7 +17,10 @@ enum class SceneFormat { Unknown, Tws, Ply, Obj, Stl, Gltf, Step };
 SceneFormat sceneFormatOf(const std::filesystem::path& path);
 std::string_view sceneFormatName(SceneFormat format);
 
-// Reads `path` with the reader for its format. Throws FormatError for unknown extensions and for
+// The up axis `path` is read with: `up` when given, else the format's (glTF Y, the rest Z).
+UpAxis fileUpAxis(const std::filesystem::path& path, UpAxis up);
+
+// Reads `path` with the reader for its format, Z up (a Y-up file is turned, up_axis.h). Throws FormatError for unknown extensions and for
 // any error the reader reports.
 void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options = {});
 

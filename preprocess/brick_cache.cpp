@@ -68,6 +68,7 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   addValue(options.position_step_m);
   // Only when set, so that a run without exclusions keeps the hash it always had.
   for (const std::string& name : options.exclude_layers) addString("exclude-layer:" + name);
+  if (options.up != UpAxis::Auto) addString(std::string("up:") + upAxisName(options.up));
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

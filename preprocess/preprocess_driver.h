@@ -21,6 +21,7 @@
 
 #include "cluster_dag.h"
 #include "progress.h"
+#include "up_axis.h"
 
 namespace tw {
 
@@ -49,6 +50,7 @@ struct PreprocessOptions {
   uint32_t visibility_rays = 1024;  // rays per view cell
   double view_cell_size_m = 0.0;    // 0: chosen from the bounds (view_cells.h)
   bool parametric_occluders = true;  // parametric clusters are candidates (visibility_build.h)
+  UpAxis up = UpAxis::Auto;          // the inputs' up axis (formats/up_axis.h)
 };
 
 // What the visibility stage built (all zero when it was off or found no mesh clusters).

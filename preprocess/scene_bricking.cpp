@@ -612,7 +612,8 @@ uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
 }
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,
-                        Progress* progress, const std::vector<std::string>& exclude_layers) {
+                        Progress* progress, const std::vector<std::string>& exclude_layers,
+                        UpAxis up) {
   SceneSurvey survey;
   for (const auto& input : inputs) survey.input_bytes += fileBytes(input);
   beginStage(progress, "survey", survey.input_bytes);
@@ -627,6 +628,7 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float 
     ReadOptions read_options;
     read_options.progress = &sub;
     read_options.exclude_layers = exclude_layers;
+    read_options.up = up;
     readScene(input, fan, read_options);
     checkCancelled(progress);
     survey.bounds.add(stats.bounds);
@@ -693,6 +695,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     ReadOptions read_options;
     read_options.progress = &sub;
     read_options.exclude_layers = options.exclude_layers;
+    read_options.up = options.up;
     read_options.warn = [](const std::string&) {};  // the survey's reading reported them
     readScene(inputs[i], sink, read_options);
     checkCancelled(options.progress);

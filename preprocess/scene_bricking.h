@@ -37,6 +37,7 @@
 #include "progress.h"
 #include "scene.h"
 #include "tessellate.h"
+#include "up_axis.h"
 
 namespace tw {
 
@@ -54,6 +55,7 @@ struct BrickingOptions {
   double position_step_m = 0.0;
   Progress* progress = nullptr;
   std::vector<std::string> exclude_layers;  // objects of these layers are left out (by name)
+  UpAxis up = UpAxis::Auto;                 // the inputs' up axis (ReadOptions::up)
 };
 
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
@@ -79,7 +81,8 @@ struct SceneSurvey {
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
                         Progress* progress = nullptr,
-                        const std::vector<std::string>& exclude_layers = {});
+                        const std::vector<std::string>& exclude_layers = {},
+                        UpAxis up = UpAxis::Auto);
 
 // One non-empty brick. Brick files live in BrickedScene::work_dir.
 struct BrickInfo {

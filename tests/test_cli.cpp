@@ -1,6 +1,8 @@
 // End to end through the `terawalk` executable: the commands a person types, their exit codes,
 // their output, and the counts `info` prints for real and generated models.
 #include <gtest/gtest.h>
+
+#include <stb_image.h>
 #include <sys/wait.h>
 
 #include <algorithm>
@@ -389,7 +391,7 @@ TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {
   if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
   RunResult info = run("info " + file.string());
   ASSERT_EQ(info.exit_code, 0) << info.output;
-  EXPECT_NE(info.output.find("(step, 441968 bytes)"), std::string::npos) << info.output;
+  EXPECT_NE(info.output.find("(step, 441968 bytes, read Z up)"), std::string::npos) << info.output;
   EXPECT_NE(info.output.find("objects     18 (18 parts, 18 with a database key)"),
             std::string::npos)
       << info.output;
@@ -405,6 +407,91 @@ TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {
   ASSERT_EQ(pick.exit_code, 0) << pick.output;
   EXPECT_NE(pick.output.find("as1/plate_1"), std::string::npos) << pick.output;
   EXPECT_NE(pick.output.find("layer       256"), std::string::npos) << pick.output;
+}
+
+// Pixels of one object in an ids_NNNNN.png: their count, mean row and bounding box.
+struct IdPixels {
+  uint64_t count = 0;
+  double mean_row = 0.0;
+  int min_x = 1 << 30, max_x = -1, min_y = 1 << 30, max_y = -1;
+};
+IdPixels pixelsOf(const std::filesystem::path& ids_png, uint32_t id) {
+  int w = 0, h = 0, channels = 0;
+  unsigned char* data = stbi_load(ids_png.string().c_str(), &w, &h, &channels, 4);
+  IdPixels p;
+  if (!data) return p;
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const unsigned char* px = data + 4 * (size_t(y) * w + x);
+      const uint32_t value = px[0] | (px[1] << 8) | (px[2] << 16) | (uint32_t(px[3]) << 24);
+      if (value != id) continue;
+      ++p.count;
+      p.mean_row += y;
+      p.min_x = std::min(p.min_x, x);
+      p.max_x = std::max(p.max_x, x);
+      p.min_y = std::min(p.min_y, y);
+      p.max_y = std::max(p.max_y, y);
+    }
+  stbi_image_free(data);
+  if (p.count) p.mean_row /= double(p.count);
+  return p;
+}
+
+// A Y-up OBJ (a floor slab and a column standing on it) read with --up y orbits upright: the
+// column stands above the floor in the image, taller than wide. Read Z up (the default) the
+// column lies on its side, and info says the model looks Y up.
+TEST(Cli, UpYTurnsAYUpObjUpright) {
+  const auto dir = test::scratchDir();
+  const auto obj = dir / "yup.obj";
+  {
+    std::string text;
+    auto box = [&](const char* name, glm::vec3 lo, glm::vec3 hi, int base) {
+      text += std::string("o ") + name + "\n";
+      for (int i = 0; i < 8; ++i)
+        text += "v " + std::to_string((i & 1) ? hi.x : lo.x) + " " +
+                std::to_string((i & 2) ? hi.y : lo.y) + " " + std::to_string((i & 4) ? hi.z : lo.z) +
+                "\n";
+      const int faces[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4},
+                               {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+      for (const auto& f : faces)
+        text += "f " + std::to_string(base + f[0]) + " " + std::to_string(base + f[1]) + " " +
+                std::to_string(base + f[2]) + " " + std::to_string(base + f[3]) + "\n";
+    };
+    box("floor", {-5.0f, 0.0f, -5.0f}, {5.0f, 0.2f, 5.0f}, 1);
+    box("column", {-0.3f, 0.2f, -0.3f}, {0.3f, 6.0f, 0.3f}, 9);
+    test::writeFile(obj, text);
+  }
+  RunResult info = run("info " + obj.string());
+  ASSERT_EQ(info.exit_code, 0) << info.output;
+  EXPECT_NE(info.output.find("if the file is Y up, read it with --up y"), std::string::npos)
+      << info.output;
+  RunResult info_y = run("info --up y " + obj.string());
+  EXPECT_EQ(info_y.output.find("warning"), std::string::npos) << info_y.output;
+  EXPECT_NE(info_y.output.find("read Y up"), std::string::npos) << info_y.output;
+
+  auto orbit = [&](const std::string& name, const std::string& up) {
+    const auto twk = dir / (name + ".twk");
+    RunResult pre = run("preprocess -q " + obj.string() + " -o " + twk.string() + up);
+    EXPECT_EQ(pre.exit_code, 0) << pre.output;
+    RunResult render = run("-q render " + twk.string() + " --orbit 1 --size 320x240 --png --out " +
+                           (dir / name).string());
+    EXPECT_EQ(render.exit_code, 0) << render.output;
+    return dir / name / "ids_00000.png";
+  };
+  // Object indices + 1: the floor is 1, the column 2.
+  const auto upright = orbit("upright", " --up y");
+  const IdPixels floor = pixelsOf(upright, 1), column = pixelsOf(upright, 2);
+  ASSERT_GT(floor.count, 100u);
+  ASSERT_GT(column.count, 100u);
+  EXPECT_LT(column.mean_row, floor.mean_row) << "the column stands above the floor";
+  EXPECT_GT(column.max_y - column.min_y, 2 * (column.max_x - column.min_x)) << "and upright";
+  EXPECT_GT(floor.max_x - floor.min_x, floor.max_y - floor.min_y) << "the floor lies flat";
+
+  const auto lying = orbit("lying", "");
+  const IdPixels lying_column = pixelsOf(lying, 2);
+  ASSERT_GT(lying_column.count, 100u);
+  EXPECT_LT(lying_column.max_y - lying_column.min_y, lying_column.max_x - lying_column.min_x)
+      << "read Z up, the column lies on its side";
 }
 
 TEST(Cli, RenderWritesFramesStatsAndReplaysItsPath) {

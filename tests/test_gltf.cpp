@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "gltf_reader.h"
+#include "scene_io.h"
 #include "test_support.h"
 
 namespace tw {
@@ -66,6 +67,29 @@ void expectFixtureScene(const CollectingSink& s) {
   expectNear(tetra.info.transform.origin, {100, 0, 10});
   expectNear(tetra.info.transform.apply(glm::vec3(1, 0, 0)), {102, 0, 10});
   expectNear(tetra.info.transform.apply(glm::vec3(0, 0, 1)), {100, 0, 12});
+}
+
+// glTF is Y up by its specification: readScene turns it Z up with no option, (x, y, z) ->
+// (x, -z, y), and --up z keeps the file's frame.
+TEST(GltfReader, ReadSceneTurnsTheYUpFileZUp) {
+  CollectingSink turned, kept;
+  readScene(fixture("two_nodes.gltf"), turned);
+  ReadOptions z_up;
+  z_up.up = UpAxis::Z;
+  readScene(fixture("two_nodes.gltf"), kept, z_up);
+  ASSERT_EQ(turned.objects.size(), 2u);
+  ASSERT_EQ(kept.objects.size(), 2u);
+  const SceneObject& frame = turned.objects[0];
+  const TriangleMesh& square = meshOf(frame);
+  EXPECT_EQ(square.positions[1], glm::vec3(1, 0, 0)) << "local frames stay";
+  expectNear(frame.info.transform.origin, {10, -30, 20});
+  expectNear(frame.info.transform.apply(square.positions[1]), {10, -30, 21});
+  // The Square's normal is +Z in the file (along the file's depth): -Y after the turn.
+  expectNear(glm::dvec3(frame.info.transform.linear * square.normals[0]), {0, -1, 0});
+  expectNear(kept.objects[0].info.transform.origin, {10, 20, 30});
+  // Handedness is kept: the turn is a rotation.
+  EXPECT_NEAR(glm::determinant(glm::dmat3(frame.info.transform.linear)),
+              glm::determinant(glm::dmat3(kept.objects[0].info.transform.linear)), 1e-6);
 }
 
 TEST(GltfReader, EmbeddedBufferFixture) { expectFixtureScene(readAll(fixture("two_nodes.gltf"))); }

@@ -25,13 +25,31 @@ struct InfoOptions {
   std::string file;
   bool json = false;
   float tolerance = kDefaultChordalTolerance;
+  std::string up = "auto";
 };
 
+// Models are mostly wider than tall (plants, buildings, ships). Read with the wrong up axis, the
+// true vertical lies along Y and the scene's Z is a plan dimension: Y is then the thinnest axis
+// and Z clearly taller than it. Worth a warning, not an error (a wall on its own is like that).
+bool looksLikeTheOtherUp(const SceneStats& s) {
+  if (s.bounds.empty()) return false;
+  const glm::dvec3 e = s.bounds.extent();
+  return e.y < e.x && e.y < e.z && e.z > 1.2 * e.y;
+}
+
+// Share of the triangle equivalent that stays parametric (primitives), in [0, 1].
+double parametricShare(const SceneStats& s) {
+  return s.totalTriangles() ? double(s.primitive_triangles) / double(s.totalTriangles()) : 0.0;
+}
+
 nlohmann::json statsToJson(const std::string& file, uint64_t file_bytes, const SceneStats& s,
-                           float tolerance) {
+                           float tolerance, UpAxis up) {
   nlohmann::json j;
   j["file"] = file;
   j["format"] = sceneFormatName(sceneFormatOf(file));
+  j["up"] = upAxisName(up);
+  j["looks_like_the_other_up"] = looksLikeTheOtherUp(s);
+  j["parametric_share"] = parametricShare(s);
   j["file_bytes"] = file_bytes;
   j["objects"] = s.objects;
   j["object_parts"] = s.parts;
@@ -66,10 +84,10 @@ nlohmann::json statsToJson(const std::string& file, uint64_t file_bytes, const S
 }
 
 void printText(const std::string& file, uint64_t file_bytes, const SceneStats& s, float tolerance,
-               double seconds) {
-  std::printf("file        %s (%s, %llu bytes)\n", file.c_str(),
+               UpAxis up, double seconds) {
+  std::printf("file        %s (%s, %llu bytes, read %s up)\n", file.c_str(),
               std::string(sceneFormatName(sceneFormatOf(file))).c_str(),
-              static_cast<unsigned long long>(file_bytes));
+              static_cast<unsigned long long>(file_bytes), up == UpAxis::Y ? "Y" : "Z");
   std::printf("objects     %llu (%llu parts, %llu with a database key)\n",
               static_cast<unsigned long long>(s.objects), static_cast<unsigned long long>(s.parts),
               static_cast<unsigned long long>(s.objects_with_db_key));
@@ -92,6 +110,8 @@ void printText(const std::string& file, uint64_t file_bytes, const SceneStats& s
               static_cast<unsigned long long>(s.mesh_triangles),
               static_cast<unsigned long long>(s.primitive_triangles),
               static_cast<unsigned long long>(s.nurbs_triangles), double(tolerance));
+  std::printf("parametric  %.1f %% of the triangle equivalent stays parametric\n",
+              100.0 * parametricShare(s));
   if (!s.bounds.empty()) {
     glm::dvec3 e = s.bounds.extent();
     std::printf("bounds      min (%.3f, %.3f, %.3f) max (%.3f, %.3f, %.3f) size %.3f x %.3f x %.3f\n",
@@ -318,6 +338,9 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--tolerance", options->tolerance,
                   "Chordal tolerance for tessellated-equivalent triangle counts (scene units)")
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--up", options->up,
+                  "The file's up axis: y or z (default: y for glTF, z for everything else)")
+      ->check(CLI::IsMember({"auto", "y", "z"}));
   cmd->callback([options, &global] {
     if (isPackageFile(options->file)) {
       infoPackage(options->file, options->json);
@@ -327,15 +350,26 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
     SceneStats stats(options->tolerance);
     ReadOptions read;
     read.progress = progress.get();
+    read.up = parseUpAxis(options->up);
+    const UpAxis up = fileUpAxis(options->file, read.up);
     auto start = std::chrono::steady_clock::now();
     readScene(options->file, stats, read);
     double seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     uint64_t bytes = std::filesystem::file_size(options->file);
     if (options->json)
-      std::cout << statsToJson(options->file, bytes, stats, options->tolerance).dump(2) << "\n";
+      std::cout << statsToJson(options->file, bytes, stats, options->tolerance, up).dump(2)
+                << "\n";
     else
-      printText(options->file, bytes, stats, options->tolerance, seconds);
+      printText(options->file, bytes, stats, options->tolerance, up, seconds);
+    if (looksLikeTheOtherUp(stats)) {
+      const glm::dvec3 e = stats.bounds.extent();
+      std::fprintf(stderr,
+                   "warning: %s: read %s up, the model is %.3g tall but only %.3g deep (%.3g "
+                   "wide); if the file is %s up, read it with --up %s\n",
+                   options->file.c_str(), up == UpAxis::Y ? "Y" : "Z", e.z, e.y, e.x,
+                   up == UpAxis::Y ? "Z" : "Y", up == UpAxis::Y ? "z" : "y");
+    }
   });
 }
 

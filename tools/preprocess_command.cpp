@@ -27,6 +27,7 @@ struct PreprocessArgs {
   double view_cell_size_m = 0.0;
   std::string parametric_occluders = "on";
   std::vector<std::string> exclude_layers;
+  std::string up = "auto";
   std::string db;
 };
 
@@ -123,6 +124,9 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--parametric-occluders", args->parametric_occluders,
                   "Parametric clusters as visibility candidates: on or off (default on)")
       ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option("--up", args->up,
+                  "The inputs' up axis: y or z (default: y for glTF, z for everything else)")
+      ->check(CLI::IsMember({"auto", "y", "z"}));
   cmd->add_option("--exclude-layer", args->exclude_layers,
                   "Leave the objects of this layer out of the package (repeatable)")
       ->allow_extra_args(false);
@@ -149,6 +153,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.view_cell_size_m = args->view_cell_size_m;
     options.parametric_occluders = args->parametric_occluders == "on";
     options.exclude_layers = args->exclude_layers;
+    options.up = parseUpAxis(args->up);
     options.database = args->db;
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);

@@ -29,17 +29,6 @@ struct SnapshotCommandOptions {
   bool no_shadows = false;
 };
 
-// "auto" (Y for glTF, whose spec says so; Z otherwise: CAD and plants), "x", "y", "z" or x,y,z.
-glm::dvec3 parseUp(const std::string& text, const std::string& file) {
-  if (text == "auto") return sceneFormatOf(file) == SceneFormat::Gltf ? glm::dvec3(0, 1, 0) : glm::dvec3(0, 0, 1);
-  if (text == "x") return {1, 0, 0};
-  if (text == "y") return {0, 1, 0};
-  if (text == "z") return {0, 0, 1};
-  glm::dvec3 up = parseVec3(text);
-  if (glm::length(up) == 0.0) throw std::invalid_argument("--up must not be the zero vector");
-  return up;
-}
-
 }  // namespace
 
 void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global) {
@@ -53,7 +42,10 @@ void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--height", o->height, "Image height in pixels")->check(CLI::Range(1u, 16384u));
   cmd->add_option("--eye", o->eye, "Camera position x,y,z (world coordinates); default: automatic");
   cmd->add_option("--target", o->target, "Point at the image centre x,y,z; default: the model's centre");
-  cmd->add_option("--up", o->up, "Up axis: auto (y for glTF, z otherwise), x, y, z or x,y,z");
+  cmd->add_option("--up", o->up,
+                  "The file's up axis: y or z (default: y for glTF, z for everything else); the "
+                  "scene is turned Z up as it is read")
+      ->check(CLI::IsMember({"auto", "y", "z"}));
   cmd->add_option("--auto", o->auto_view, "Automatic camera when --eye is not given")
       ->check(CLI::IsMember({"outside"}));
   cmd->add_option("--azimuth", o->azimuth_deg, "Automatic view: degrees right of the front view");
@@ -79,7 +71,7 @@ void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global) {
     options.render.color_by = o->color_by == "scene"    ? SnapshotColorBy::Scene
                               : o->color_by == "object" ? SnapshotColorBy::Object
                                                         : SnapshotColorBy::Auto;
-    options.up = parseUp(o->up, o->file);
+    options.file_up = parseUpAxis(o->up);
     if (!o->eye.empty()) options.eye = parseVec3(o->eye);
     if (!o->target.empty()) options.target = parseVec3(o->target);
     options.fov_y_deg = o->fov_deg;

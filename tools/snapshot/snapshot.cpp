@@ -59,6 +59,7 @@ SnapshotReport snapshotFile(const std::filesystem::path& scene_path, const std::
   SnapshotBuilder builder(options.build);
   ReadOptions read_options;
   read_options.progress = progress;
+  read_options.up = options.file_up;
   readScene(scene_path, builder, read_options);
   const double read_seconds = secondsSince(start);
 

@@ -11,6 +11,7 @@
 #include "snapshot_builder.h"
 #include "snapshot_camera.h"
 #include "snapshot_render.h"
+#include "up_axis.h"
 
 namespace tw {
 
@@ -21,7 +22,8 @@ struct SnapshotOptions {
   // comes from the automatic outside view (framed for the whole model).
   std::optional<glm::dvec3> eye;
   std::optional<glm::dvec3> target;
-  glm::dvec3 up{0.0, 0.0, 1.0};
+  glm::dvec3 up{0.0, 0.0, 1.0};  // the camera's; scenes are read Z up
+  UpAxis file_up = UpAxis::Auto;  // the file's up axis (ReadOptions::up)
   double fov_y_deg = 45.0;
   double azimuth_deg = 35.0;    // automatic view only
   double elevation_deg = 30.0;  // automatic view only
