@@ -23,6 +23,9 @@ struct ReadOptions {
   // The file's up axis (up_axis.h); readScene turns Y-up files Z up. Auto: Y for glTF, Z for
   // everything else.
   UpAxis up = UpAxis::Auto;
+  // CAD importers: solids that are primitives of the scene model stay primitives; false meshes
+  // everything (to compare what keeping them saves).
+  bool cad_primitives = true;
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;

@@ -69,6 +69,7 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   // Only when set, so that a run without exclusions keeps the hash it always had.
   for (const std::string& name : options.exclude_layers) addString("exclude-layer:" + name);
   if (options.up != UpAxis::Auto) addString(std::string("up:") + upAxisName(options.up));
+  if (!options.cad_primitives) addString("cad-primitives:off");
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

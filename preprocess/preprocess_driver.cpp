@@ -262,6 +262,7 @@ BrickCache PreprocessRun::openCache() {
   bricking_.progress = progress_;
   bricking_.exclude_layers = options_.exclude_layers;
   bricking_.up = options_.up;
+  bricking_.cad_primitives = options_.cad_primitives;
   dag_options_.cluster_size = options_.cluster_size;
 
   RunHash hash;
@@ -286,7 +287,8 @@ void PreprocessRun::brickInputs() {
   if (!report_.bricking_reused) {
     clock_.start("survey");
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
-                                     bricking_.exclude_layers, bricking_.up);
+                                     bricking_.exclude_layers, bricking_.up,
+                                     bricking_.cad_primitives);
     throwIfCancelled(progress_);
     // The budget must hold the smallest brick this run can build (bricks sized from the budget
     // shrink with it down to kMinBrickTriangles) and the per-object and per-instance tables: if

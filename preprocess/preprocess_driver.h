@@ -51,6 +51,7 @@ struct PreprocessOptions {
   double view_cell_size_m = 0.0;    // 0: chosen from the bounds (view_cells.h)
   bool parametric_occluders = true;  // parametric clusters are candidates (visibility_build.h)
   UpAxis up = UpAxis::Auto;          // the inputs' up axis (formats/up_axis.h)
+  bool cad_primitives = true;        // CAD importers keep primitive solids (ReadOptions)
 };
 
 // What the visibility stage built (all zero when it was off or found no mesh clusters).

@@ -56,6 +56,7 @@ struct BrickingOptions {
   Progress* progress = nullptr;
   std::vector<std::string> exclude_layers;  // objects of these layers are left out (by name)
   UpAxis up = UpAxis::Auto;                 // the inputs' up axis (ReadOptions::up)
+  bool cad_primitives = true;               // ReadOptions::cad_primitives
 };
 
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
@@ -82,7 +83,7 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
                         Progress* progress = nullptr,
                         const std::vector<std::string>& exclude_layers = {},
-                        UpAxis up = UpAxis::Auto);
+                        UpAxis up = UpAxis::Auto, bool cad_primitives = true);
 
 // One non-empty brick. Brick files live in BrickedScene::work_dir.
 struct BrickInfo {

@@ -28,6 +28,7 @@ struct PreprocessArgs {
   std::string parametric_occluders = "on";
   std::vector<std::string> exclude_layers;
   std::string up = "auto";
+  std::string cad_primitives = "on";
   std::string db;
 };
 
@@ -127,6 +128,10 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--up", args->up,
                   "The inputs' up axis: y or z (default: y for glTF, z for everything else)")
       ->check(CLI::IsMember({"auto", "y", "z"}));
+  cmd->add_option("--cad-primitives", args->cad_primitives,
+                  "STEP solids that are cylinders, cones, spheres or boxes stay primitives: on or "
+                  "off (mesh everything; default on)")
+      ->check(CLI::IsMember({"on", "off"}));
   cmd->add_option("--exclude-layer", args->exclude_layers,
                   "Leave the objects of this layer out of the package (repeatable)")
       ->allow_extra_args(false);
@@ -154,6 +159,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.parametric_occluders = args->parametric_occluders == "on";
     options.exclude_layers = args->exclude_layers;
     options.up = parseUpAxis(args->up);
+    options.cad_primitives = args->cad_primitives == "on";
     options.database = args->db;
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);

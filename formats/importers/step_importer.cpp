@@ -45,11 +45,13 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
 #include "format_error.h"
+#include "step_primitives.h"
 #include "tws_reader.h"
 #include "tws_writer.h"
 
@@ -125,7 +127,19 @@ uint32_t rgba(const Quantity_Color& c) {
 struct PartMesh {
   glm::dvec3 center{0.0};
   TriangleMesh mesh;
+  std::optional<RecognizedPrimitive> primitive;  // instead of the mesh, when the part is one
 };
+
+// Positions are compared within this share of the part's size when recognizing primitives.
+constexpr double kRelativePrimitiveTolerance = 1e-6;
+
+std::optional<RecognizedPrimitive> primitiveOfPart(const TopoDS_Shape& shape) {
+  Bnd_Box box;
+  BRepBndLib::Add(shape, box);
+  if (box.IsVoid()) return std::nullopt;
+  const double diagonal = std::sqrt(box.SquareExtent());
+  return recognizePrimitive(shape, std::max(1e-12, kRelativePrimitiveTolerance * diagonal));
+}
 
 PartMesh meshPart(const TopoDS_Shape& shape) {
   PartMesh part;
@@ -174,6 +188,18 @@ PartMesh meshPart(const TopoDS_Shape& shape) {
   return part;
 }
 
+// `local` (a primitive's frame in the part's coordinates) carried by `placement`.
+Transform composed(const gp_Trsf& placement, const Transform& local) {
+  Transform t;
+  const gp_Pnt origin = gp_Pnt(local.origin.x, local.origin.y, local.origin.z).Transformed(placement);
+  t.origin = glm::dvec3(origin.X(), origin.Y(), origin.Z());
+  glm::dmat3 linear;
+  for (int column = 0; column < 3; ++column)
+    for (int row = 0; row < 3; ++row) linear[column][row] = placement.Value(row + 1, column + 1);
+  t.linear = glm::mat3(linear * glm::dmat3(local.linear));
+  return t;
+}
+
 Transform transformOf(const gp_Trsf& placement, const glm::dvec3& center) {
   Transform t;
   const gp_Pnt origin = gp_Pnt(center.x, center.y, center.z).Transformed(placement);
@@ -220,7 +246,8 @@ class AssemblyWalker {
         colors_(XCAFDoc_DocumentTool::ColorTool(doc->Main())),
         layers_(XCAFDoc_DocumentTool::LayerTool(doc->Main())),
         sink_(sink),
-        max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)) {
+        max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)),
+        keep_primitives_(options.cad_primitives) {
     TDF_LabelSequence layer_labels;
     layers_->GetLayerLabels(layer_labels);
     file_has_layers_ = layer_labels.Length() > 0;
@@ -311,10 +338,15 @@ class AssemblyWalker {
     const TopoDS_Shape shape = shapes_->GetShape(product);
     if (shape.IsNull()) return;
     auto cached = meshes_.find(shape.TShape().get());
-    if (cached == meshes_.end())
-      cached = meshes_.emplace(shape.TShape().get(), meshPart(shape.Located(TopLoc_Location()))).first;
+    if (cached == meshes_.end()) {
+      const TopoDS_Shape unplaced = shape.Located(TopLoc_Location());
+      PartMesh part;
+      if (keep_primitives_) part.primitive = primitiveOfPart(unplaced);
+      if (!part.primitive) part = meshPart(unplaced);
+      cached = meshes_.emplace(shape.TShape().get(), std::move(part)).first;
+    }
     const PartMesh& part = cached->second;
-    if (part.mesh.indices.empty()) return;  // curves, points or empty compounds
+    if (!part.primitive && part.mesh.indices.empty()) return;  // curves, points, empty compounds
 
     ObjectInfo info;
     info.id = next_id_++;
@@ -327,6 +359,11 @@ class AssemblyWalker {
     colorOf(instance, product, info.color_rgba);
     // The product's own location (a shape label may carry one) comes before the instance's.
     const gp_Trsf own = shape.Location().Transformation();
+    if (part.primitive) {
+      info.transform = composed(placement * own, part.primitive->frame);
+      sink_.onObject(SceneObject{info, part.primitive->primitive});
+      return;
+    }
     info.transform = transformOf(placement * own, part.center);
     emitInParts(sink_, info, part.mesh, max_part_triangles_);
   }
@@ -336,6 +373,7 @@ class AssemblyWalker {
   Handle(XCAFDoc_LayerTool) layers_;
   SceneSink& sink_;
   uint32_t max_part_triangles_;
+  bool keep_primitives_;
   bool file_has_layers_ = false;
   uint32_t next_id_ = 0;
   std::map<std::string, uint32_t> layer_index_;
