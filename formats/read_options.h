@@ -26,6 +26,8 @@ struct ReadOptions {
   // CAD importers: solids that are primitives of the scene model stay primitives; false meshes
   // everything (to compare what keeping them saves).
   bool cad_primitives = true;
+  // CAD importers: the meshing's chordal tolerance in metres; 0: the importer's own rule.
+  double cad_tolerance_m = 0.0;
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;

@@ -70,6 +70,10 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   for (const std::string& name : options.exclude_layers) addString("exclude-layer:" + name);
   if (options.up != UpAxis::Auto) addString(std::string("up:") + upAxisName(options.up));
   if (!options.cad_primitives) addString("cad-primitives:off");
+  if (options.cad_tolerance_m > 0.0) {
+    addString("cad-tolerance");
+    addValue(options.cad_tolerance_m);
+  }
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

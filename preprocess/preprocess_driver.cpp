@@ -263,6 +263,7 @@ BrickCache PreprocessRun::openCache() {
   bricking_.exclude_layers = options_.exclude_layers;
   bricking_.up = options_.up;
   bricking_.cad_primitives = options_.cad_primitives;
+  bricking_.cad_tolerance_m = options_.cad_tolerance_m;
   dag_options_.cluster_size = options_.cluster_size;
 
   RunHash hash;
@@ -288,7 +289,7 @@ void PreprocessRun::brickInputs() {
     clock_.start("survey");
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
                                      bricking_.exclude_layers, bricking_.up,
-                                     bricking_.cad_primitives);
+                                     bricking_.cad_primitives, bricking_.cad_tolerance_m);
     throwIfCancelled(progress_);
     // The budget must hold the smallest brick this run can build (bricks sized from the budget
     // shrink with it down to kMinBrickTriangles) and the per-object and per-instance tables: if

@@ -52,6 +52,7 @@ struct PreprocessOptions {
   bool parametric_occluders = true;  // parametric clusters are candidates (visibility_build.h)
   UpAxis up = UpAxis::Auto;          // the inputs' up axis (formats/up_axis.h)
   bool cad_primitives = true;        // CAD importers keep primitive solids (ReadOptions)
+  double cad_tolerance_m = 0.0;      // CAD importers' chordal tolerance; 0: their own rule
 };
 
 // What the visibility stage built (all zero when it was off or found no mesh clusters).

@@ -613,7 +613,7 @@ uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,
                         Progress* progress, const std::vector<std::string>& exclude_layers,
-                        UpAxis up, bool cad_primitives) {
+                        UpAxis up, bool cad_primitives, double cad_tolerance_m) {
   SceneSurvey survey;
   for (const auto& input : inputs) survey.input_bytes += fileBytes(input);
   beginStage(progress, "survey", survey.input_bytes);
@@ -630,6 +630,7 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float 
     read_options.exclude_layers = exclude_layers;
     read_options.up = up;
     read_options.cad_primitives = cad_primitives;
+    read_options.cad_tolerance_m = cad_tolerance_m;
     readScene(input, fan, read_options);
     checkCancelled(progress);
     survey.bounds.add(stats.bounds);
@@ -698,6 +699,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     read_options.exclude_layers = options.exclude_layers;
     read_options.up = options.up;
     read_options.cad_primitives = options.cad_primitives;
+    read_options.cad_tolerance_m = options.cad_tolerance_m;
     read_options.warn = [](const std::string&) {};  // the survey's reading reported them
     readScene(inputs[i], sink, read_options);
     checkCancelled(options.progress);

@@ -57,6 +57,7 @@ struct BrickingOptions {
   std::vector<std::string> exclude_layers;  // objects of these layers are left out (by name)
   UpAxis up = UpAxis::Auto;                 // the inputs' up axis (ReadOptions::up)
   bool cad_primitives = true;               // ReadOptions::cad_primitives
+  double cad_tolerance_m = 0.0;             // ReadOptions::cad_tolerance_m
 };
 
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
@@ -83,7 +84,8 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
                         Progress* progress = nullptr,
                         const std::vector<std::string>& exclude_layers = {},
-                        UpAxis up = UpAxis::Auto, bool cad_primitives = true);
+                        UpAxis up = UpAxis::Auto, bool cad_primitives = true,
+                        double cad_tolerance_m = 0.0);
 
 // One non-empty brick. Brick files live in BrickedScene::work_dir.
 struct BrickInfo {

@@ -29,6 +29,7 @@ struct PreprocessArgs {
   std::vector<std::string> exclude_layers;
   std::string up = "auto";
   std::string cad_primitives = "on";
+  double cad_tolerance_m = 0.0;
   std::string db;
 };
 
@@ -132,6 +133,10 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
                   "STEP solids that are cylinders, cones, spheres or boxes stay primitives: on or "
                   "off (mesh everything; default on)")
       ->check(CLI::IsMember({"on", "off"}));
+  cmd->add_option("--cad-tolerance", args->cad_tolerance_m,
+                  "Chordal tolerance in metres for meshing STEP faces (default: min(2 mm, 0.2 % of "
+                  "each part's size))")
+      ->check(CLI::Range(1e-7, 1.0));
   cmd->add_option("--exclude-layer", args->exclude_layers,
                   "Leave the objects of this layer out of the package (repeatable)")
       ->allow_extra_args(false);
@@ -160,6 +165,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.exclude_layers = args->exclude_layers;
     options.up = parseUpAxis(args->up);
     options.cad_primitives = args->cad_primitives == "on";
+    options.cad_tolerance_m = args->cad_tolerance_m;
     options.database = args->db;
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);

@@ -141,7 +141,7 @@ std::optional<RecognizedPrimitive> primitiveOfPart(const TopoDS_Shape& shape) {
   return recognizePrimitive(shape, std::max(1e-12, kRelativePrimitiveTolerance * diagonal));
 }
 
-PartMesh meshPart(const TopoDS_Shape& shape) {
+PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
   PartMesh part;
   Bnd_Box box;
   BRepBndLib::Add(shape, box);
@@ -151,7 +151,9 @@ PartMesh meshPart(const TopoDS_Shape& shape) {
   part.center = glm::dvec3(0.5 * (x0 + x1), 0.5 * (y0 + y1), 0.5 * (z0 + z1));
   const double diagonal = std::sqrt((x1 - x0) * (x1 - x0) + (y1 - y0) * (y1 - y0) +
                                     (z1 - z0) * (z1 - z0));
-  const double deflection = std::max(1e-6, std::min(kMaxDeflectionM, kRelativeDeflection * diagonal));
+  const double deflection =
+      fixed_deflection > 0.0 ? fixed_deflection
+                             : std::max(1e-6, std::min(kMaxDeflectionM, kRelativeDeflection * diagonal));
   BRepMesh_IncrementalMesh mesher(shape, deflection, false, kAngularDeflectionRad, false);
 
   // Nodes shared along edges are exact copies, so a weld by exact position joins the faces.
@@ -247,7 +249,8 @@ class AssemblyWalker {
         layers_(XCAFDoc_DocumentTool::LayerTool(doc->Main())),
         sink_(sink),
         max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)),
-        keep_primitives_(options.cad_primitives) {
+        keep_primitives_(options.cad_primitives),
+        deflection_m_(options.cad_tolerance_m) {
     TDF_LabelSequence layer_labels;
     layers_->GetLayerLabels(layer_labels);
     file_has_layers_ = layer_labels.Length() > 0;
@@ -342,7 +345,7 @@ class AssemblyWalker {
       const TopoDS_Shape unplaced = shape.Located(TopLoc_Location());
       PartMesh part;
       if (keep_primitives_) part.primitive = primitiveOfPart(unplaced);
-      if (!part.primitive) part = meshPart(unplaced);
+      if (!part.primitive) part = meshPart(unplaced, deflection_m_);
       cached = meshes_.emplace(shape.TShape().get(), std::move(part)).first;
     }
     const PartMesh& part = cached->second;
@@ -374,6 +377,7 @@ class AssemblyWalker {
   SceneSink& sink_;
   uint32_t max_part_triangles_;
   bool keep_primitives_;
+  double deflection_m_;  // 0: the per-part rule
   bool file_has_layers_ = false;
   uint32_t next_id_ = 0;
   std::map<std::string, uint32_t> layer_index_;
