@@ -9,6 +9,7 @@
 #include <BRepPrimAPI_MakeCone.hxx>
 #include <BRepPrimAPI_MakeCylinder.hxx>
 #include <BRepPrimAPI_MakeSphere.hxx>
+#include <BRepPrimAPI_MakeTorus.hxx>
 #include <gp_Ax1.hxx>
 #include <gp_Trsf.hxx>
 
@@ -113,6 +114,30 @@ TEST(StepPrimitives, CylinderConeSphereAndBoxAreRecognizedWhereverPlaced) {
       EXPECT_LT(best, 1e-5) << "corner " << i;
     }
   }
+}
+
+// An elbow: 90 degrees of a torus (major 1.5, tube 0.3) closed by two discs. The recognized
+// segment's tube centre line starts and ends where OpenCASCADE's does.
+TEST(StepPrimitives, TorusSegmentIsAnElbowWithItsSweep) {
+  for (const double degrees : {90.0, 135.0, 270.0}) {
+    const double angle = degrees * M_PI / 180.0;
+    const auto r = recognizePrimitive(placed(BRepPrimAPI_MakeTorus(1.5, 0.3, angle).Shape()), 1e-7);
+    ASSERT_TRUE(r.has_value()) << degrees;
+    const TorusSegment* t = std::get_if<TorusSegment>(&r->primitive);
+    ASSERT_NE(t, nullptr);
+    EXPECT_NEAR(t->major_radius, 1.5f, 1e-5f);
+    EXPECT_NEAR(t->minor_radius, 0.3f, 1e-5f);
+    EXPECT_NEAR(t->sweep_rad, float(angle), 1e-5f) << degrees;
+    // The canonical centre line: (R cos a, R sin a, 0) for a in [0, sweep].
+    const glm::dvec3 start = r->frame.apply(glm::vec3(t->major_radius, 0, 0));
+    const glm::dvec3 end = r->frame.apply(
+        glm::vec3(t->major_radius * std::cos(t->sweep_rad), t->major_radius * std::sin(t->sweep_rad), 0));
+    expectNear(start, where(gp_Pnt(1.5, 0, 0)), 1e-5);
+    expectNear(end, where(gp_Pnt(1.5 * std::cos(angle), 1.5 * std::sin(angle), 0)), 1e-5);
+  }
+  const auto ring = recognizePrimitive(BRepPrimAPI_MakeTorus(2.0, 0.25).Shape(), 1e-7);
+  ASSERT_TRUE(ring.has_value());
+  EXPECT_NEAR(std::get<TorusSegment>(ring->primitive).sweep_rad, float(2.0 * M_PI), 1e-5f);
 }
 
 TEST(StepPrimitives, NearMissesStayMeshes) {

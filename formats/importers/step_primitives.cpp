@@ -15,6 +15,7 @@
 #include <gp_Cylinder.hxx>
 #include <gp_Pln.hxx>
 #include <gp_Sphere.hxx>
+#include <gp_Torus.hxx>
 
 #include <algorithm>
 #include <cmath>
@@ -169,6 +170,75 @@ std::optional<RecognizedPrimitive> sphere(const std::vector<Face>& faces, double
   return RecognizedPrimitive{Sphere{float(r)}, frameAlong(first.Location(), gp_Dir(0, 0, 1))};
 }
 
+// A torus segment (a pipe elbow): toroidal faces of one axis, centre and radii, closed by two
+// discs of the tube's radius in planes through the axis (none for a whole ring). The frame's X
+// points at the start disc's centre and the sweep turns counter-clockwise about Z through the
+// tube to the end disc.
+std::optional<RecognizedPrimitive> torus(const std::vector<Face>& faces, double tolerance) {
+  std::vector<const Face*> sides, planes;
+  for (const Face& f : faces) (f.type == GeomAbs_Torus ? sides : planes).push_back(&f);
+  if (sides.empty() || (planes.size() != 0 && planes.size() != 2)) return std::nullopt;
+  const gp_Torus first = sides[0]->surface.Torus();
+  const gp_Pnt center = first.Location();
+  const gp_Dir axis = first.Axis().Direction();
+  const double major = first.MajorRadius(), minor = first.MinorRadius();
+  if (!(minor > tolerance) || !(major > minor)) return std::nullopt;
+  double side_area = 0.0;
+  gp_XYZ side_centroid(0, 0, 0);
+  for (const Face* f : sides) {
+    const gp_Torus t = f->surface.Torus();
+    if (!parallel(t.Axis().Direction(), axis) || t.Location().Distance(center) > tolerance ||
+        std::abs(t.MajorRadius() - major) > tolerance ||
+        std::abs(t.MinorRadius() - minor) > tolerance)
+      return std::nullopt;
+    side_area += f->area;
+    side_centroid += f->centroid.XYZ() * f->area;
+  }
+  // Angles about the axis, measured from a reference direction in the torus plane.
+  const gp_Dir reference = first.XAxis().Direction();
+  const gp_Dir across = axis.Crossed(reference);
+  auto angleOf = [&](const gp_Pnt& p) {
+    const gp_Vec v(center, p);
+    return std::atan2(v.Dot(gp_Vec(across)), v.Dot(gp_Vec(reference)));
+  };
+  double start = 0.0, sweep = 2.0 * kPi;
+  if (planes.size() == 2) {
+    double at[2];
+    for (int i = 0; i < 2; ++i) {
+      const Face* f = planes[size_t(i)];
+      const gp_Pln plane = f->surface.Plane();
+      // A plane through the axis: its normal is perpendicular to it and it holds the centre.
+      if (std::abs(plane.Axis().Direction().Dot(axis)) > kAngleTolerance ||
+          plane.Distance(center) > tolerance ||
+          std::abs(gp_Vec(center, f->centroid).Dot(gp_Vec(axis))) > tolerance ||
+          std::abs(center.Distance(f->centroid) - major) > tolerance ||
+          !nearlyEqual(f->area, kPi * minor * minor, kAreaTolerance))
+        return std::nullopt;
+      at[i] = angleOf(f->centroid);
+    }
+    // The sweep from at[0] counter-clockwise to at[1], or the other way round: the one that
+    // passes through the tube (its area-weighted centroid's angle lies inside the sweep).
+    auto ccw = [](double from, double to) {
+      double d = to - from;
+      while (d <= 0.0) d += 2.0 * kPi;
+      return d;
+    };
+    const double mid = angleOf(gp_Pnt(side_centroid / side_area));
+    const bool forward = ccw(at[0], mid) < ccw(at[0], at[1]);
+    start = forward ? at[0] : at[1];
+    sweep = forward ? ccw(at[0], at[1]) : ccw(at[1], at[0]);
+  }
+  if (!nearlyEqual(side_area, 2.0 * kPi * major * minor * sweep, kAreaTolerance))
+    return std::nullopt;
+  const gp_Dir x = gp_Dir(gp_Vec(reference) * std::cos(start) + gp_Vec(across) * std::sin(start));
+  const gp_Dir y = axis.Crossed(x);
+  Transform t;
+  t.origin = glm::dvec3(center.X(), center.Y(), center.Z());
+  auto column = [](const gp_Dir& d) { return glm::vec3(float(d.X()), float(d.Y()), float(d.Z())); };
+  t.linear = glm::mat3(column(x), column(y), column(axis));
+  return RecognizedPrimitive{TorusSegment{float(major), float(minor), float(sweep)}, t};
+}
+
 std::optional<RecognizedPrimitive> box(const std::vector<Face>& faces, double tolerance) {
   if (faces.size() != 6) return std::nullopt;
   // Three directions, each with two planes: their offsets along it.
@@ -227,7 +297,7 @@ std::optional<RecognizedPrimitive> recognizePrimitive(const TopoDS_Shape& shape,
   if (faces_outside > 0) return std::nullopt;
 
   std::vector<Face> faces;
-  bool planes = false, cylinders = false, cones = false, spheres = false;
+  bool planes = false, cylinders = false, cones = false, spheres = false, tori = false;
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
     Face f = faceOf(TopoDS::Face(e.Current()));
     switch (f.type) {
@@ -235,13 +305,15 @@ std::optional<RecognizedPrimitive> recognizePrimitive(const TopoDS_Shape& shape,
       case GeomAbs_Cylinder: cylinders = true; break;
       case GeomAbs_Cone: cones = true; break;
       case GeomAbs_Sphere: spheres = true; break;
+      case GeomAbs_Torus: tori = true; break;
       default: return std::nullopt;
     }
     faces.push_back(std::move(f));
   }
   if (faces.empty()) return std::nullopt;
-  const int kinds = int(cylinders) + int(cones) + int(spheres);
+  const int kinds = int(cylinders) + int(cones) + int(spheres) + int(tori);
   if (kinds > 1) return std::nullopt;
+  if (tori) return torus(faces, tolerance);
   if (cylinders) return cylinder(faces, tolerance);
   if (cones) return cone(faces, tolerance);
   if (spheres) return planes ? std::nullopt : sphere(faces, tolerance);

@@ -1,8 +1,9 @@
 // Whole B-rep solids that are primitives of the scene model, recognized from their faces so a
 // STEP part stays parametric: a capped cylinder (cylindrical faces of one axis and radius closed
 // by two planar discs), a capped cone or frustum (conical faces of one axis closed by one or two
-// discs), a sphere (spherical faces of one centre and radius covering the whole sphere) and a box
-// (six rectangles, pairwise opposite along three perpendicular axes).
+// discs), a sphere (spherical faces of one centre and radius covering the whole sphere), a torus
+// segment (a pipe elbow: toroidal faces closed by two discs in planes through its axis, or a
+// whole ring) and a box (six rectangles, pairwise opposite along three perpendicular axes).
 //
 // Why: a plant's pipes, vessels and structural members are such solids; kept as primitives they
 // cost a hundred bytes each in the package instead of their triangles, are drawn at the
