@@ -154,6 +154,29 @@ TEST(StepImport, MissingEmptyAndNonStepFilesNameTheFile) {
   rejects(dir / "garbled.stp", "Line ");
 }
 
+// A second reading of an unchanged file reuses the first translation (the preprocessor reads
+// every input twice); a changed file or other options translate again.
+TEST(StepImport, SecondReadingReusesTheTranslationUntilTheFileChanges) {
+  const fs::path copy = test::scratchDir() / "part.stp";
+  fs::copy_file(sample("splinecage.stp"), copy);
+  ReadOptions quiet;
+  std::vector<std::string> warnings;
+  quiet.warn = [&](const std::string& w) { warnings.push_back(w); };
+  test::CollectingSink first, second, meshed, changed;
+  readStep(copy, first, quiet);
+  const size_t first_warnings = warnings.size();
+  readStep(copy, second, quiet);
+  EXPECT_EQ(second.triangles(), first.triangles());
+  EXPECT_EQ(warnings.size(), 2 * first_warnings) << "the warnings come again with the scene";
+  fs::copy_file(sample("as1-oc-214.stp"), copy, fs::copy_options::overwrite_existing);
+  readStep(copy, changed, quiet);
+  EXPECT_EQ(changed.objects.size(), 18u) << "the new content, not the cached scene";
+  ReadOptions other_tolerance = quiet;
+  other_tolerance.cad_tolerance_m = 0.0005;
+  readStep(copy, meshed, other_tolerance);
+  EXPECT_NE(meshed.triangles(), changed.triangles()) << "another tolerance translates again";
+}
+
 // Warnings for entities that fail their checks, and the rest read.
 TEST(StepImport, EntitiesFailingTheirChecksAreWarningsNamingThem) {
   std::vector<std::string> warnings;

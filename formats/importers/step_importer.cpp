@@ -45,6 +45,7 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -489,16 +490,17 @@ class TemporaryScene {
   std::filesystem::path path_;
 };
 
-}  // namespace
+// One finished translation: the scene file the child wrote and the warnings it sent.
+struct Translation {
+  std::shared_ptr<const TemporaryScene> scene;
+  std::vector<std::string> warnings;
+};
 
-void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
+// Runs the translation in a child process. OpenCASCADE dereferences what a damaged file leaves
+// null, so a crash there must be an error here; its memory also goes back when it exits.
+Translation translateInChild(const std::filesystem::path& path, const ReadOptions& options) {
   const std::string file = path.string();
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec))
-    throw FormatError(file, "cannot open: no such file");
-  // OpenCASCADE dereferences what a damaged file leaves null, so it translates in a child
-  // process: a crash there is an error here, and its memory goes back when it exits.
-  const TemporaryScene scene;
+  auto scene = std::make_shared<const TemporaryScene>();
   int fds[2];
   if (::pipe(fds) != 0) throw FormatError(file, "cannot create a pipe for the STEP translation");
   const pid_t child = ::fork();
@@ -509,7 +511,7 @@ void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOpti
   }
   if (child == 0) {
     ::close(fds[0]);
-    translate(path, scene.path(), options, fds[1]);
+    translate(path, scene->path(), options, fds[1]);
     ::close(fds[1]);
     ::_exit(0);
   }
@@ -525,13 +527,14 @@ void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOpti
   int status = 0;
   while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
+  Translation done{scene, {}};
   std::string error;
   for (size_t at = 0; at < report.size();) {
     const size_t end = std::min(report.find('\n', at), report.size());
     const std::string line = report.substr(at, end - at);
     at = end + 1;
     if (line.empty()) continue;
-    if (line[0] == 'W') readWarning(options, line.substr(1));
+    if (line[0] == 'W') done.warnings.push_back(line.substr(1));
     else if (line[0] == 'E' && error.empty()) error = line.substr(1);
   }
   if (WIFSIGNALED(status))
@@ -541,9 +544,66 @@ void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOpti
   if (!error.empty()) throw FormatError(file, error);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
     throw FormatError(file, "the STEP translation process failed");
+  return done;
+}
+
+// The preprocessor reads each input twice (survey, then bricking): the second reading of an
+// unchanged file with the same options reuses the first's scene file instead of translating
+// again. A few files are kept, until the process exits.
+class TranslationCache {
+ public:
+  static TranslationCache& instance() {
+    static TranslationCache cache;
+    return cache;
+  }
+
+  // The key: what the translation's output depends on.
+  static std::string keyOf(const std::filesystem::path& path, const ReadOptions& options) {
+    std::error_code ec;
+    const auto canonical = std::filesystem::weakly_canonical(path, ec);
+    const auto size = std::filesystem::file_size(path, ec);
+    const auto time = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
+    return (ec ? path.string() : canonical.string()) + "|" + std::to_string(size) + "|" +
+           std::to_string(time) + "|" + std::to_string(options.cad_primitives) + "|" +
+           std::to_string(options.cad_tolerance_m) + "|" + std::to_string(options.max_part_triangles);
+  }
+
+  std::optional<Translation> find(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    for (const auto& [k, t] : entries_)
+      if (k == key) return t;
+    return std::nullopt;
+  }
+
+  void add(const std::string& key, const Translation& translation) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    entries_.emplace_back(key, translation);
+    if (entries_.size() > kEntries) entries_.erase(entries_.begin());
+  }
+
+ private:
+  static constexpr size_t kEntries = 4;
+  std::mutex mutex_;
+  std::vector<std::pair<std::string, Translation>> entries_;
+};
+
+}  // namespace
+
+void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
+  const std::string file = path.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw FormatError(file, "cannot open: no such file");
+  const std::string key = TranslationCache::keyOf(path, options);
+  std::optional<Translation> translation = TranslationCache::instance().find(key);
+  if (!translation) {
+    translation = translateInChild(path, options);
+    TranslationCache::instance().add(key, *translation);
+  }
+  for (const std::string& warning : translation->warnings) readWarning(options, warning);
   ReadOptions scene_options = options;
   scene_options.progress = nullptr;
-  readTws(scene.path(), sink, scene_options);
+  readTws(translation->scene->path(), sink, scene_options);
   if (options.progress) updateProgress(options.progress, std::filesystem::file_size(path, ec));
 }
 
