@@ -23,8 +23,8 @@ struct ReadOptions {
   // The file's up axis (up_axis.h); readScene turns Y-up files Z up. Auto: Y for glTF, Z for
   // everything else.
   UpAxis up = UpAxis::Auto;
-  // CAD importers: solids that are primitives of the scene model stay primitives; false meshes
-  // everything (to compare what keeping them saves).
+  // CAD importers (STEP, IFC): solids that are primitives of the scene model stay primitives;
+  // false meshes everything (to compare what keeping them saves).
   bool cad_primitives = true;
   // CAD importers: the meshing's chordal tolerance in metres; 0: the importer's own rule.
   double cad_tolerance_m = 0.0;

@@ -10,6 +10,7 @@
 #include "layer_filter_sink.h"
 #include "obj_reader.h"
 #include "ply_reader.h"
+#include "ifc_importer.h"
 #include "step_importer.h"
 #include "stl_reader.h"
 #include "tws_reader.h"
@@ -26,6 +27,7 @@ SceneFormat sceneFormatOf(const std::filesystem::path& path) {
   if (ext == ".stl") return SceneFormat::Stl;
   if (ext == ".gltf" || ext == ".glb") return SceneFormat::Gltf;
   if (ext == ".stp" || ext == ".step") return SceneFormat::Step;
+  if (ext == ".ifc") return SceneFormat::Ifc;
   return SceneFormat::Unknown;
 }
 
@@ -37,6 +39,7 @@ std::string_view sceneFormatName(SceneFormat format) {
     case SceneFormat::Stl: return "stl";
     case SceneFormat::Gltf: return "gltf";
     case SceneFormat::Step: return "step";
+    case SceneFormat::Ifc: return "ifc";
     case SceneFormat::Unknown: break;
   }
   return "unknown";
@@ -67,10 +70,11 @@ void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOpt
     case SceneFormat::Stl: return readStl(path, sink, options);
     case SceneFormat::Gltf: return readGltf(path, sink, options);
     case SceneFormat::Step: return readStep(path, sink, options);
+    case SceneFormat::Ifc: return readIfc(path, sink, options);
     case SceneFormat::Unknown: break;
   }
   throw FormatError(path.string(),
-                    "unknown file type (expected .tws, .ply, .obj, .stl, .gltf, .glb, .stp or .step)");
+                    "unknown file type (expected .tws, .ply, .obj, .stl, .gltf, .glb, .stp, .step or .ifc)");
 }
 
 }  // namespace tw

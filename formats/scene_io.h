@@ -10,10 +10,10 @@
 
 namespace tw {
 
-enum class SceneFormat { Unknown, Tws, Ply, Obj, Stl, Gltf, Step };
+enum class SceneFormat { Unknown, Tws, Ply, Obj, Stl, Gltf, Step, Ifc };
 
 // The format implied by the file's extension (case-insensitive): .tws, .ply, .obj, .stl,
-// .gltf/.glb, .stp/.step.
+// .gltf/.glb, .stp/.step, .ifc.
 SceneFormat sceneFormatOf(const std::filesystem::path& path);
 std::string_view sceneFormatName(SceneFormat format);
 

@@ -409,6 +409,30 @@ TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {
   EXPECT_NE(pick.output.find("layer       256"), std::string::npos) << pick.output;
 }
 
+// Every IFC sample preprocesses and verifies; a pick on TestModel's wall names it by its
+// GlobalId and its layer.
+TEST(Cli, IfcSamplesPreprocessVerifyAndPickAWallByItsGlobalId) {
+  const auto dir = test::scratchDir();
+  for (const char* name : {"TestModel_IFC4Add2", "acad2010_objects", "basic_shape_Brep",
+                           "basic_shape_CSG", "basic_shape_SweptSolid", "cylinders",
+                           "bcf-architectural", "bcf-mep"}) {
+    const auto file = test::sharedDataDir() / (std::string(name) + ".ifc");
+    if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+    const auto twk = dir / (std::string(name) + ".twk");
+    RunResult pre = run("preprocess -q " + file.string() + " -o " + twk.string());
+    ASSERT_EQ(pre.exit_code, 0) << name << ": " << pre.output;
+    RunResult verify = run("verify -q " + twk.string());
+    EXPECT_EQ(verify.exit_code, 0) << name << ": " << verify.output;
+    EXPECT_NE(verify.output.find(": OK:"), std::string::npos) << name << ": " << verify.output;
+  }
+  RunResult pick = run("pick " + (dir / "TestModel_IFC4Add2.twk").string() +
+                       " --eye 0,-30,3 --target 0,0,3 --pixel 640,360");
+  ASSERT_EQ(pick.exit_code, 0) << pick.output;
+  EXPECT_NE(pick.output.find("db key      37cU2nGL100xirW00wMfmm"), std::string::npos) << pick.output;
+  EXPECT_NE(pick.output.find("layer       A-WALL-____-OTLN"), std::string::npos) << pick.output;
+  EXPECT_NE(pick.output.find("Basic Wall"), std::string::npos) << pick.output;
+}
+
 // Pixels of one object in an ids_NNNNN.png: their count, mean row and bounding box.
 struct IdPixels {
   uint64_t count = 0;

@@ -1,0 +1,779 @@
+// IFC products to scene objects, parametric where IFC is. See ifc_importer.h.
+#include "ifc_importer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <unordered_map>
+#include <unordered_set>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "format_error.h"
+#include "step21_file.h"
+#include "tessellate.h"
+
+namespace tw {
+namespace {
+
+using Kind = Step21Value::Kind;
+constexpr int kMaxDepth = 32;  // placement chains, mapped items, boolean trees
+
+const Step21Value& nullValue() {
+  static const Step21Value v;
+  return v;
+}
+const Step21Value& arg(const Step21Instance* in, size_t i) {
+  return in && i < in->args.size() ? in->args[i] : nullValue();
+}
+double numberOf(const Step21Value& v, double fallback) {
+  if (v.isNumber()) return v.number;
+  if (v.kind == Kind::Typed && !v.items.empty() && v.items[0].isNumber()) return v.items[0].number;
+  return fallback;
+}
+std::string textOf(const Step21Value& v) {
+  if (v.kind == Kind::String || v.kind == Kind::Enum) return v.text;
+  if (v.kind == Kind::Typed && !v.items.empty()) return textOf(v.items[0]);
+  return "";
+}
+
+// A geometry failure of one item: skipped with a warning, the rest imports.
+struct ItemError {
+  std::string reason;
+};
+
+class IfcImporter {
+ public:
+  IfcImporter(const Step21File& file, SceneSink& sink, const ReadOptions& options)
+      : f_(file), sink_(sink), options_(options) {}
+
+  void run() {
+    readUnits();
+    readStyles();
+    readLayers();
+    std::vector<uint64_t> ids;
+    for (const auto& [id, instance] : f_.instances()) ids.push_back(id);
+    std::sort(ids.begin(), ids.end());
+    for (uint64_t id : ids) {
+      const Step21Instance& in = *f_.find(id);
+      if (!isDrawnProduct(in)) continue;
+      ++products_;
+      importProduct(id, in);
+    }
+    if (voids_ > 0)
+      warn(std::to_string(voids_) + " openings (IfcRelVoidsElement) are not cut from their hosts");
+    if (clippings_ > 0)
+      warn(std::to_string(clippings_) + " boolean results keep their first operand only");
+    if (skipped_warnings_ > kMaxWarnings)
+      warn(std::to_string(skipped_warnings_ - kMaxWarnings) + " more items skipped");
+  }
+
+  uint32_t objects() const { return next_id_; }
+  uint32_t products() const { return products_; }
+
+ private:
+  static constexpr int kMaxWarnings = 20;
+
+  void warn(const std::string& message) { readWarning(options_, f_.fileName() + ": " + message); }
+  void skipped(uint64_t item, const std::string& product_type, const std::string& reason) {
+    if (++skipped_warnings_ <= kMaxWarnings)
+      warn("#" + std::to_string(item) + " (in an " + product_type + "): " + reason + "; skipped");
+  }
+
+  // --- Units ---------------------------------------------------------------------------------
+  static double siPrefix(const std::string& p) {
+    static const std::map<std::string, double> prefixes = {
+        {"EXA", 1e18}, {"PETA", 1e15}, {"TERA", 1e12}, {"GIGA", 1e9}, {"MEGA", 1e6},
+        {"KILO", 1e3}, {"HECTO", 1e2}, {"DECA", 1e1}, {"DECI", 1e-1}, {"CENTI", 1e-2},
+        {"MILLI", 1e-3}, {"MICRO", 1e-6}, {"NANO", 1e-9}};
+    auto it = prefixes.find(p);
+    return it == prefixes.end() ? 1.0 : it->second;
+  }
+
+  // Metres (or radians) per unit of an IfcSIUnit or IfcConversionBasedUnit, 0 if unknown.
+  double unitScale(const Step21Instance* unit, int depth) const {
+    if (!unit || depth > 4) return 0.0;
+    if (unit->type == "IFCSIUNIT") return siPrefix(textOf(arg(unit, 2)));
+    if (unit->type == "IFCCONVERSIONBASEDUNIT" || unit->type == "IFCCONVERSIONBASEDUNITWITHOFFSET") {
+      const Step21Instance* measure = f_.deref(arg(unit, 3));
+      if (!measure) return 0.0;
+      const double value = numberOf(arg(measure, 0), 0.0);
+      const double base = unitScale(f_.deref(arg(measure, 1)), depth + 1);
+      return value * (base > 0.0 ? base : 1.0);
+    }
+    return 0.0;
+  }
+
+  void readUnits() {
+    for (uint64_t id : f_.idsOfType("IFCUNITASSIGNMENT")) {
+      for (const Step21Value& u : arg(f_.find(id), 0).items) {
+        const Step21Instance* unit = f_.deref(u);
+        if (!unit) continue;
+        const std::string type = textOf(arg(unit, unit->type == "IFCSIUNIT" ? 1 : 1));
+        const double scale = unitScale(unit, 0);
+        if (scale <= 0.0) continue;
+        if (type == "LENGTHUNIT") length_ = scale;
+        if (type == "PLANEANGLEUNIT") angle_ = scale;
+      }
+      break;
+    }
+  }
+
+  // --- Styles and layers ---------------------------------------------------------------------
+  std::optional<uint32_t> surfaceColour(const Step21Instance* style, int depth) const {
+    if (!style || depth > 4) return std::nullopt;
+    if (style->type == "IFCPRESENTATIONSTYLEASSIGNMENT") {
+      for (const Step21Value& s : arg(style, 0).items)
+        if (auto c = surfaceColour(f_.deref(s), depth + 1)) return c;
+      return std::nullopt;
+    }
+    if (style->type != "IFCSURFACESTYLE") return std::nullopt;
+    for (const Step21Value& s : arg(style, 2).items) {
+      const Step21Instance* shading = f_.deref(s);
+      if (!shading || (shading->type != "IFCSURFACESTYLERENDERING" &&
+                       shading->type != "IFCSURFACESTYLESHADING"))
+        continue;
+      const Step21Instance* rgb = f_.deref(arg(shading, 0));
+      if (!rgb || rgb->type != "IFCCOLOURRGB") continue;
+      auto channel = [&](size_t i) {
+        return uint32_t(std::lround(std::clamp(numberOf(arg(rgb, i), 0.7), 0.0, 1.0) * 255.0));
+      };
+      const double transparency = std::clamp(numberOf(arg(shading, 1), 0.0), 0.0, 1.0);
+      const uint32_t alpha = uint32_t(std::lround((1.0 - transparency) * 255.0));
+      return channel(1) | (channel(2) << 8) | (channel(3) << 16) | (std::max(alpha, 1u) << 24);
+    }
+    return std::nullopt;
+  }
+
+  void readStyles() {
+    for (uint64_t id : f_.idsOfType("IFCSTYLEDITEM")) {
+      const Step21Instance* styled = f_.find(id);
+      const Step21Value& item = arg(styled, 0);
+      if (item.kind != Kind::Ref) continue;
+      for (const Step21Value& s : arg(styled, 1).items)
+        if (auto c = surfaceColour(f_.deref(s), 0)) {
+          colours_.emplace(item.ref, *c);
+          break;
+        }
+    }
+  }
+
+  void readLayers() {
+    for (const char* type : {"IFCPRESENTATIONLAYERASSIGNMENT", "IFCPRESENTATIONLAYERWITHSTYLE"})
+      for (uint64_t id : f_.idsOfType(type)) {
+        const Step21Instance* layer = f_.find(id);
+        const std::string name = textOf(arg(layer, 0));
+        if (name.empty()) continue;
+        for (const Step21Value& item : arg(layer, 2).items)
+          if (item.kind == Kind::Ref) layer_of_.emplace(item.ref, name);
+      }
+    for (uint64_t id : f_.idsOfType("IFCRELVOIDSELEMENT")) {
+      (void)id;
+      ++voids_;
+    }
+  }
+
+  uint32_t layerIndex(const std::string& name) {
+    auto [it, inserted] = layers_.emplace(name, uint32_t(layers_.size()));
+    if (inserted) sink_.onLayer(it->second, Layer{name});
+    return it->second;
+  }
+
+  // --- Products ------------------------------------------------------------------------------
+  // IfcProduct's attributes: GlobalId, OwnerHistory, Name, Description, ObjectType,
+  // ObjectPlacement, Representation. Its subtypes are recognized by that shape, so every class
+  // of both schemas is read without a schema table.
+  bool isDrawnProduct(const Step21Instance& in) const {
+    static const std::unordered_set<std::string> not_drawn = {
+        "IFCOPENINGELEMENT", "IFCOPENINGSTANDARDCASE", "IFCSPACE", "IFCANNOTATION", "IFCGRID",
+        "IFCVIRTUALELEMENT", "IFCSITE"};
+    if (in.args.size() < 7 || not_drawn.count(in.type)) return false;
+    if (in.args[0].kind != Kind::String || in.args[0].text.size() != 22) return false;
+    const Step21Instance* shape = f_.deref(in.args[6]);
+    return shape && (shape->type == "IFCPRODUCTDEFINITIONSHAPE" ||
+                     shape->type == "IFCPRODUCTREPRESENTATION");
+  }
+
+  glm::dvec3 point(const Step21Instance* p) const {
+    glm::dvec3 out(0.0);
+    if (!p || p->type != "IFCCARTESIANPOINT") return out;
+    const auto& c = arg(p, 0).items;
+    for (size_t i = 0; i < 3 && i < c.size(); ++i) out[int(i)] = numberOf(c[i], 0.0) * length_;
+    return out;
+  }
+  std::optional<glm::dvec3> direction(const Step21Instance* d) const {
+    if (!d || d->type != "IFCDIRECTION") return std::nullopt;
+    glm::dvec3 out(0.0);
+    const auto& c = arg(d, 0).items;
+    for (size_t i = 0; i < 3 && i < c.size(); ++i) out[int(i)] = numberOf(c[i], 0.0);
+    const double n = glm::length(out);
+    if (!(n > 1e-12)) return std::nullopt;
+    return out / n;
+  }
+
+  // A frame from an origin, a Z and an approximate X (IFC's Axis2Placement rule).
+  static glm::dmat4 frame(const glm::dvec3& origin, glm::dvec3 z, glm::dvec3 x) {
+    z = glm::normalize(z);
+    x = x - glm::dot(x, z) * z;
+    if (glm::length(x) < 1e-9) {
+      const glm::dvec3 helper = std::abs(z.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+      x = helper - glm::dot(helper, z) * z;
+    }
+    x = glm::normalize(x);
+    const glm::dvec3 y = glm::cross(z, x);
+    glm::dmat4 m(1.0);
+    m[0] = glm::dvec4(x, 0.0);
+    m[1] = glm::dvec4(y, 0.0);
+    m[2] = glm::dvec4(z, 0.0);
+    m[3] = glm::dvec4(origin, 1.0);
+    return m;
+  }
+
+  glm::dmat4 axisPlacement(const Step21Instance* a) const {
+    if (!a) return glm::dmat4(1.0);
+    const glm::dvec3 origin = point(f_.deref(arg(a, 0)));
+    if (a->type == "IFCAXIS2PLACEMENT2D") {
+      const glm::dvec3 x = direction(f_.deref(arg(a, 1))).value_or(glm::dvec3(1, 0, 0));
+      return frame(origin, glm::dvec3(0, 0, 1), glm::dvec3(x.x, x.y, 0.0));
+    }
+    if (a->type != "IFCAXIS2PLACEMENT3D") return glm::dmat4(1.0);
+    const glm::dvec3 z = direction(f_.deref(arg(a, 1))).value_or(glm::dvec3(0, 0, 1));
+    const glm::dvec3 x = direction(f_.deref(arg(a, 2))).value_or(glm::dvec3(1, 0, 0));
+    return frame(origin, z, x);
+  }
+
+  glm::dmat4 placement(const Step21Instance* p, int depth) const {
+    if (!p || depth > kMaxDepth || p->type != "IFCLOCALPLACEMENT") return glm::dmat4(1.0);
+    return placement(f_.deref(arg(p, 0)), depth + 1) * axisPlacement(f_.deref(arg(p, 1)));
+  }
+
+  void importProduct(uint64_t id, const Step21Instance& product) {
+    ObjectInfo info;
+    info.name = textOf(product.args[2]);
+    if (info.name.empty()) info.name = product.type;
+    info.db_key = product.args[0].text;
+    product_type_ = product.type;
+    const glm::dmat4 world = placement(f_.deref(product.args[5]), 0);
+
+    // Body representations: 'Body' by identifier, else any with solid or surface items.
+    std::vector<const Step21Instance*> bodies, others;
+    const Step21Instance* shape = f_.deref(product.args[6]);
+    for (const Step21Value& r : arg(shape, 2).items) {
+      const Step21Instance* rep = f_.deref(r);
+      if (!rep) continue;
+      const std::string identifier = textOf(arg(rep, 1));
+      if (identifier == "Body") bodies.push_back(rep);
+      else if (identifier.empty() || identifier == "Facetation" || identifier == "Mesh")
+        others.push_back(rep);
+    }
+    if (bodies.empty()) bodies = others;
+
+    std::string layer;
+    for (const Step21Value& r : arg(shape, 2).items)
+      if (auto it = layer_of_.find(r.ref); r.kind == Kind::Ref && it != layer_of_.end()) {
+        layer = it->second;
+        break;
+      }
+    mesh_ = TriangleMesh{};
+    primitives_.clear();
+    colour_ = 0;
+    for (const Step21Instance* rep : bodies)
+      for (const Step21Value& item : arg(rep, 3).items) {
+        if (layer.empty())
+          if (auto it = layer_of_.find(item.ref); item.kind == Kind::Ref && it != layer_of_.end())
+            layer = it->second;
+        if (item.kind == Kind::Ref) importItem(item.ref, glm::dmat4(1.0), 0);
+      }
+    if (!options_.cad_primitives) meshPrimitives();
+    if (mesh_.indices.empty() && primitives_.empty()) return;
+
+    info.layer = layerIndex(layer.empty() ? product.type : layer);
+    info.color_rgba = colour_;
+    if (!mesh_.indices.empty()) {
+      ObjectInfo mesh_info = info;
+      mesh_info.id = next_id_++;
+      mesh_info.transform = toTransform(world);
+      sink_.onObject(SceneObject{mesh_info, mesh_});
+    }
+    for (auto& [local, primitive] : primitives_) {
+      ObjectInfo p = info;
+      p.id = next_id_++;
+      p.transform = toTransform(world * local);
+      sink_.onObject(SceneObject{p, primitive});
+    }
+  }
+
+  // ReadOptions::cad_primitives off: the primitives become triangles of the product's mesh, at
+  // the scene's default chordal tolerance (what the preprocessor would tessellate them at).
+  void meshPrimitives() {
+    for (const auto& [local, primitive] : primitives_) {
+      TriangleMesh part;
+      tessellatePrimitive(primitive, kDefaultChordalTolerance, part);
+      const uint32_t base = uint32_t(mesh_.positions.size());
+      for (const glm::vec3& p : part.positions)
+        mesh_.positions.push_back(glm::vec3(local * glm::dvec4(glm::dvec3(p), 1.0)));
+      for (uint32_t i : part.indices) mesh_.indices.push_back(base + i);
+    }
+    primitives_.clear();
+  }
+
+  static Transform toTransform(const glm::dmat4& m) {
+    Transform t;
+    t.origin = glm::dvec3(m[3]);
+    t.linear = glm::mat3(glm::dmat3(m));
+    return t;
+  }
+
+  // --- Items ---------------------------------------------------------------------------------
+  void importItem(uint64_t id, const glm::dmat4& local, int depth) {
+    const Step21Instance* item = f_.find(id);
+    if (!item) return skipped(id, product_type_, "the item is missing");
+    if (depth > kMaxDepth) return skipped(id, product_type_, "mapped items nested too deep");
+    if (colour_ == 0)
+      if (auto it = colours_.find(id); it != colours_.end()) colour_ = it->second;
+    try {
+      const std::string& t = item->type;
+      if (t == "IFCEXTRUDEDAREASOLID") extruded(*item, local);
+      else if (t == "IFCREVOLVEDAREASOLID") revolved(*item, local);
+      else if (t == "IFCFACETEDBREP" || t == "IFCFACETEDBREPWITHVOIDS") shell(f_.deref(arg(item, 0)), local);
+      else if (t == "IFCSHELLBASEDSURFACEMODEL" || t == "IFCFACEBASEDSURFACEMODEL")
+        for (const Step21Value& s : arg(item, 0).items) shell(f_.deref(s), local);
+      else if (t == "IFCPOLYGONALFACESET") polygonalFaceSet(*item, local);
+      else if (t == "IFCTRIANGULATEDFACESET") triangulatedFaceSet(*item, local);
+      else if (t == "IFCMAPPEDITEM") mapped(*item, local, depth);
+      else if (t == "IFCBOOLEANCLIPPINGRESULT" || t == "IFCBOOLEANRESULT") boolean(*item, local, depth);
+      else if (t == "IFCCSGSOLID") csgPrimitive(f_.deref(arg(item, 0)), local, depth);
+      else if (t == "IFCBLOCK" || t == "IFCRIGHTCIRCULARCYLINDER" || t == "IFCSPHERE")
+        csgPrimitive(item, local, depth);
+      else if (t == "IFCSWEPTDISKSOLID") sweptDisk(*item, local);
+      else throw ItemError{"geometry " + t + " is not read"};
+    } catch (const ItemError& e) {
+      skipped(id, product_type_, e.reason);
+    }
+  }
+
+  void mapped(const Step21Instance& item, const glm::dmat4& local, int depth) {
+    const Step21Instance* source = f_.deref(arg(&item, 0));
+    const Step21Instance* op = f_.deref(arg(&item, 1));
+    if (!source || source->type != "IFCREPRESENTATIONMAP") throw ItemError{"no representation map"};
+    glm::dmat4 target(1.0);
+    if (op && op->type.rfind("IFCCARTESIANTRANSFORMATIONOPERATOR3D", 0) == 0) {
+      const glm::dvec3 origin = point(f_.deref(arg(op, 2)));
+      const glm::dvec3 x = direction(f_.deref(arg(op, 0))).value_or(glm::dvec3(1, 0, 0));
+      const glm::dvec3 z = op->args.size() > 4 ? direction(f_.deref(arg(op, 4))).value_or(glm::dvec3(0, 0, 1))
+                                               : glm::dvec3(0, 0, 1);
+      // Scale, and for the non-uniform operator Scale2 and Scale3 (each defaulting to Scale).
+      const double s = numberOf(arg(op, 3), 1.0);
+      glm::dvec3 scale(s);
+      if (op->type == "IFCCARTESIANTRANSFORMATIONOPERATOR3DNONUNIFORM")
+        scale = glm::dvec3(s, numberOf(arg(op, 5), s), numberOf(arg(op, 6), s));
+      target = frame(origin, z, x) * glm::scale(glm::dmat4(1.0), scale);
+    }
+    const glm::dmat4 to = local * target * axisPlacement(f_.deref(arg(source, 0)));
+    const Step21Instance* rep = f_.deref(arg(source, 1));
+    for (const Step21Value& sub : arg(rep, 3).items)
+      if (sub.kind == Kind::Ref) importItem(sub.ref, to, depth + 1);
+  }
+
+  void boolean(const Step21Instance& item, const glm::dmat4& local, int depth) {
+    const std::string op = textOf(arg(&item, 0));
+    if (op != "UNION") ++clippings_;
+    for (size_t i = 1; i <= (op == "UNION" ? 2u : 1u); ++i) {
+      const Step21Value& operand = arg(&item, i);
+      if (operand.kind == Kind::Ref) importItem(operand.ref, local, depth + 1);
+    }
+  }
+
+  void csgPrimitive(const Step21Instance* in, const glm::dmat4& local, int depth) {
+    if (!in) throw ItemError{"CSG solid without a tree"};
+    if (in->type == "IFCBOOLEANRESULT") return boolean(*in, local, depth);
+    const glm::dmat4 at = local * axisPlacement(f_.deref(arg(in, 0)));
+    if (in->type == "IFCBLOCK") {  // its position is a corner
+      const glm::dvec3 size(numberOf(arg(in, 1), 0) * length_, numberOf(arg(in, 2), 0) * length_,
+                            numberOf(arg(in, 3), 0) * length_);
+      if (!(size.x > 0 && size.y > 0 && size.z > 0)) throw ItemError{"a block without volume"};
+      add(at * glm::translate(glm::dmat4(1.0), 0.5 * size), Box{glm::vec3(0.5 * size)});
+    } else if (in->type == "IFCRIGHTCIRCULARCYLINDER") {  // centred on its position
+      const double h = numberOf(arg(in, 1), 0) * length_, r = numberOf(arg(in, 2), 0) * length_;
+      if (!(h > 0 && r > 0)) throw ItemError{"a cylinder without volume"};
+      add(at * glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, -0.5 * h)), Cylinder{float(r), float(h), true});
+    } else if (in->type == "IFCSPHERE") {
+      const double r = numberOf(arg(in, 1), 0) * length_;
+      if (!(r > 0)) throw ItemError{"a sphere without volume"};
+      add(at, Sphere{float(r)});
+    } else {
+      throw ItemError{"CSG primitive " + in->type + " is not read"};
+    }
+  }
+
+  // Keeps `primitive` at `local`. A scale in `local` along the primitive's own axes (mapped
+  // items scale their representation: a unit-depth column stretched to its height) goes into
+  // the primitive's parameters, so every placement stays a rotation; a scale that would shear
+  // it (a cylinder scaled unevenly across its axis) is an error.
+  void add(const glm::dmat4& local, Primitive primitive) {
+    glm::dmat4 rigid = local;
+    glm::dvec3 s;
+    for (int a = 0; a < 3; ++a) {
+      s[a] = glm::length(glm::dvec3(local[a]));
+      if (!(s[a] > 1e-12)) throw ItemError{"a placement that flattens the item"};
+      rigid[a] = glm::dvec4(glm::dvec3(local[a]) / s[a], 0.0);
+    }
+    for (int a = 0; a < 3; ++a)
+      if (std::abs(glm::dot(glm::dvec3(rigid[a]), glm::dvec3(rigid[(a + 1) % 3]))) > 1e-6)
+        throw ItemError{"a placement that shears the item"};
+    const bool uniform_xy = std::abs(s.x - s.y) <= 1e-9 * std::max(s.x, s.y);
+    const bool uniform = uniform_xy && std::abs(s.x - s.z) <= 1e-9 * std::max(s.x, s.z);
+    if (auto* b = std::get_if<Box>(&primitive)) {
+      b->half_extents *= glm::vec3(s);
+    } else if (auto* c = std::get_if<Cylinder>(&primitive)) {
+      if (!uniform_xy) throw ItemError{"a cylinder scaled unevenly across its axis"};
+      c->radius *= float(s.x);
+      c->height *= float(s.z);
+    } else if (auto* e = std::get_if<Extrusion>(&primitive)) {
+      for (glm::vec2& p : e->profile) p *= glm::vec2(s);
+      e->height *= float(s.z);
+    } else if (!uniform) {
+      throw ItemError{"a scaled sphere, bend or revolution"};
+    } else if (auto* sp = std::get_if<Sphere>(&primitive)) {
+      sp->radius *= float(s.x);
+    } else if (auto* t = std::get_if<TorusSegment>(&primitive)) {
+      t->major_radius *= float(s.x);
+      t->minor_radius *= float(s.x);
+    } else if (auto* r = std::get_if<Revolution>(&primitive)) {
+      for (glm::vec2& p : r->profile) p *= float(s.x);
+    }
+    if (glm::determinant(glm::dmat3(rigid)) < 0.0) throw ItemError{"a mirrored placement"};
+    primitives_.emplace_back(rigid, std::move(primitive));
+  }
+
+  // The points of a profile's outer curve, in its plane, counter-clockwise, without the closing
+  // repeat.
+  std::vector<glm::dvec2> curvePoints(const Step21Instance* curve) const {
+    std::vector<glm::dvec2> pts;
+    if (!curve) throw ItemError{"a profile without a curve"};
+    if (curve->type == "IFCPOLYLINE") {
+      for (const Step21Value& p : arg(curve, 0).items) pts.push_back(glm::dvec2(point(f_.deref(p))));
+    } else if (curve->type == "IFCINDEXEDPOLYCURVE") {
+      const Step21Instance* list = f_.deref(arg(curve, 0));
+      if (!list) throw ItemError{"an indexed polycurve without points"};
+      if (arg(curve, 1).kind == Kind::List && !arg(curve, 1).items.empty()) {
+        for (const Step21Value& segment : arg(curve, 1).items)
+          if (segment.kind == Kind::Typed && segment.text == "IFCARCINDEX")
+            throw ItemError{"arc segments in a profile are not read"};
+      }
+      for (const Step21Value& c : arg(list, 0).items)
+        if (c.items.size() >= 2)
+          pts.push_back(glm::dvec2(numberOf(c.items[0], 0), numberOf(c.items[1], 0)) * length_);
+    } else if (curve->type == "IFCCOMPOSITECURVE") {
+      for (const Step21Value& sv : arg(curve, 0).items) {
+        const Step21Instance* segment = f_.deref(sv);
+        if (!segment) throw ItemError{"a composite curve with a missing segment"};
+        std::vector<glm::dvec2> part = segmentPoints(f_.deref(arg(segment, 2)));
+        if (textOf(arg(segment, 1)) == "F") std::reverse(part.begin(), part.end());
+        for (const glm::dvec2& p : part)
+          if (pts.empty() || glm::length(pts.back() - p) > 1e-9) pts.push_back(p);
+      }
+    } else {
+      throw ItemError{"profile curve " + curve->type + " is not read"};
+    }
+    if (pts.size() > 1 && glm::length(pts.front() - pts.back()) < 1e-9) pts.pop_back();
+    if (pts.size() < 3) throw ItemError{"a profile of fewer than three points"};
+    double area2 = 0.0;
+    for (size_t i = 0; i < pts.size(); ++i) {
+      const glm::dvec2 a = pts[i], b = pts[(i + 1) % pts.size()];
+      area2 += a.x * b.y - b.x * a.y;
+    }
+    if (std::abs(area2) < 1e-18) throw ItemError{"a profile without area"};
+    if (area2 < 0.0) std::reverse(pts.begin(), pts.end());
+    return pts;
+  }
+
+  // The points of one segment of a composite curve: a polyline, or a line or circle trimmed by
+  // two Cartesian points (arcs sampled every 10 degrees at most).
+  std::vector<glm::dvec2> segmentPoints(const Step21Instance* c) const {
+    if (!c) throw ItemError{"a composite curve segment without a curve"};
+    std::vector<glm::dvec2> pts;
+    if (c->type == "IFCPOLYLINE") {
+      for (const Step21Value& p : arg(c, 0).items) pts.push_back(glm::dvec2(point(f_.deref(p))));
+      return pts;
+    }
+    if (c->type != "IFCTRIMMEDCURVE") throw ItemError{"curve segment " + c->type + " is not read"};
+    auto trimPoint = [&](const Step21Value& trims) -> std::optional<glm::dvec2> {
+      for (const Step21Value& t : trims.items)
+        if (const Step21Instance* p = f_.deref(t); p && p->type == "IFCCARTESIANPOINT")
+          return glm::dvec2(point(p));
+      return std::nullopt;
+    };
+    const auto a = trimPoint(arg(c, 1)), b = trimPoint(arg(c, 2));
+    if (!a || !b) throw ItemError{"a trimmed curve not trimmed by points"};
+    const bool sense = textOf(arg(c, 3)) != "F";
+    const Step21Instance* basis = f_.deref(arg(c, 0));
+    if (basis && basis->type == "IFCLINE") return sense ? std::vector{*a, *b} : std::vector{*b, *a};
+    if (!basis || basis->type != "IFCCIRCLE") throw ItemError{"a trimmed curve that is not a line or circle"};
+    const glm::dvec2 centre(glm::dvec3(axisPlacement(f_.deref(arg(basis, 0)))[3]));
+    const double r = numberOf(arg(basis, 1), 0.0) * length_;
+    double t0 = std::atan2(a->y - centre.y, a->x - centre.x);
+    double t1 = std::atan2(b->y - centre.y, b->x - centre.x);
+    if (sense) { while (t1 <= t0) t1 += 2.0 * std::numbers::pi; }
+    else { while (t1 >= t0) t1 -= 2.0 * std::numbers::pi; }
+    const int steps = std::max(1, int(std::ceil(std::abs(t1 - t0) / (std::numbers::pi / 18.0))));
+    for (int i = 0; i <= steps; ++i) {
+      const double t = t0 + (t1 - t0) * double(i) / double(steps);
+      pts.push_back(centre + r * glm::dvec2(std::cos(t), std::sin(t)));
+    }
+    return pts;
+  }
+
+  void extruded(const Step21Instance& item, const glm::dmat4& local) {
+    const Step21Instance* profile = f_.deref(arg(&item, 0));
+    const glm::dmat4 at = local * axisPlacement(f_.deref(arg(&item, 1)));
+    const glm::dvec3 dir = direction(f_.deref(arg(&item, 2))).value_or(glm::dvec3(0, 0, 1));
+    const double depth = numberOf(arg(&item, 3), 0.0) * length_;
+    if (!(depth > 0.0)) throw ItemError{"an extrusion without depth"};
+    if (std::abs(dir.z - 1.0) > 1e-6) throw ItemError{"an oblique extrusion is not read"};
+    if (!profile) throw ItemError{"an extrusion without a profile"};
+    const std::string& t = profile->type;
+    const glm::dmat4 plane = at * axisPlacement(f_.deref(arg(profile, 2)));
+    if (t == "IFCRECTANGLEPROFILEDEF" || t == "IFCRECTANGLEHOLLOWPROFILEDEF" ||
+        t == "IFCROUNDEDRECTANGLEPROFILEDEF") {
+      const double x = numberOf(arg(profile, 3), 0) * length_, y = numberOf(arg(profile, 4), 0) * length_;
+      if (!(x > 0 && y > 0)) throw ItemError{"a rectangle without area"};
+      add(plane * glm::translate(glm::dmat4(1.0), glm::dvec3(0, 0, 0.5 * depth)),
+          Box{glm::vec3(float(0.5 * x), float(0.5 * y), float(0.5 * depth))});
+    } else if (t == "IFCCIRCLEPROFILEDEF" || t == "IFCCIRCLEHOLLOWPROFILEDEF") {
+      const double r = numberOf(arg(profile, 3), 0) * length_;
+      if (!(r > 0)) throw ItemError{"a circle without radius"};
+      add(plane, Cylinder{float(r), float(depth), true});
+    } else if (t == "IFCARBITRARYCLOSEDPROFILEDEF" || t == "IFCARBITRARYPROFILEDEFWITHVOIDS") {
+      if (t == "IFCARBITRARYPROFILEDEFWITHVOIDS" && ++profile_voids_ == 1)
+        warn("the voids of profiles (IfcArbitraryProfileDefWithVoids) are filled");
+      Extrusion e;
+      for (const glm::dvec2& p : curvePoints(f_.deref(arg(profile, 2)))) e.profile.push_back(glm::vec2(p));
+      e.height = float(depth);
+      add(at, std::move(e));
+    } else {
+      throw ItemError{"profile " + t + " is not read"};
+    }
+  }
+
+  void revolved(const Step21Instance& item, const glm::dmat4& local) {
+    const Step21Instance* profile = f_.deref(arg(&item, 0));
+    const glm::dmat4 at = local * axisPlacement(f_.deref(arg(&item, 1)));
+    const Step21Instance* axis = f_.deref(arg(&item, 2));
+    const double sweep = numberOf(arg(&item, 3), 0.0) * angle_;
+    if (!profile || !axis) throw ItemError{"a revolution without profile or axis"};
+    if (!(sweep > 0.0)) throw ItemError{"a revolution without angle"};
+    const glm::dvec3 a = point(f_.deref(arg(axis, 0)));
+    const glm::dvec3 u = direction(f_.deref(arg(axis, 1))).value_or(glm::dvec3(0, 0, 1));
+    // The profile lies in the position's XY plane; the axis too.
+    auto toRevolution = [&](const glm::dvec3& p, glm::dvec3& foot) {
+      const double along = glm::dot(p - a, u);
+      foot = a + along * u;
+      return glm::dvec2(glm::length(p - foot), along);
+    };
+    const std::string& t = profile->type;
+    if (t == "IFCCIRCLEPROFILEDEF" || t == "IFCCIRCLEHOLLOWPROFILEDEF") {
+      const glm::dmat4 plane = axisPlacement(f_.deref(arg(profile, 2)));
+      const glm::dvec3 c(plane[3]);
+      const double r = numberOf(arg(profile, 3), 0) * length_;
+      glm::dvec3 foot;
+      const glm::dvec2 rz = toRevolution(c, foot);
+      if (!(r > 0) || !(rz.x > r)) throw ItemError{"a revolved circle that crosses its axis"};
+      add(at * frame(foot, u, c - foot), TorusSegment{float(rz.x), float(r), float(sweep)});
+      return;
+    }
+    if (t != "IFCARBITRARYCLOSEDPROFILEDEF") throw ItemError{"revolved profile " + t + " is not read"};
+    const std::vector<glm::dvec2> pts = curvePoints(f_.deref(arg(profile, 2)));
+    Revolution rev;
+    glm::dvec3 x_dir(0.0), foot;
+    for (const glm::dvec2& p : pts) {
+      const glm::dvec2 rz = toRevolution(glm::dvec3(p, 0.0), foot);
+      if (glm::length(x_dir) == 0.0 && rz.x > 1e-12) x_dir = glm::dvec3(p, 0.0) - foot;
+      rev.profile.push_back(glm::vec2(rz));
+    }
+    if (glm::length(x_dir) == 0.0) throw ItemError{"a revolved profile on its axis"};
+    rev.profile.push_back(rev.profile.front());
+    rev.sweep_rad = float(sweep);
+    add(at * frame(a, u, x_dir), std::move(rev));
+  }
+
+  void sweptDisk(const Step21Instance& item, const glm::dmat4& local) {
+    const Step21Instance* directrix = f_.deref(arg(&item, 0));
+    const double r = numberOf(arg(&item, 1), 0.0) * length_;
+    if (!directrix || directrix->type != "IFCPOLYLINE") throw ItemError{"a swept disk along a curve that is not a polyline"};
+    if (!(r > 0)) throw ItemError{"a swept disk without radius"};
+    std::vector<glm::dvec3> pts;
+    for (const Step21Value& p : arg(directrix, 0).items) pts.push_back(point(f_.deref(p)));
+    for (size_t i = 0; i + 1 < pts.size(); ++i) {
+      const glm::dvec3 d = pts[i + 1] - pts[i];
+      const double length = glm::length(d);
+      if (length < 1e-9) continue;
+      add(local * frame(pts[i], d, glm::dvec3(1, 0, 0)), Cylinder{float(r), float(length), true});
+    }
+  }
+
+  // --- Meshes --------------------------------------------------------------------------------
+  // Appends a planar polygon, triangulated by ear clipping in its best-fitting plane.
+  void polygon(const std::vector<glm::dvec3>& pts, const glm::dmat4& local) {
+    const size_t n = pts.size();
+    if (n < 3) return;
+    glm::dvec3 normal(0.0);
+    for (size_t i = 0; i < n; ++i) normal += glm::cross(pts[i], pts[(i + 1) % n]);
+    if (glm::length(normal) < 1e-18) return;
+    const int drop = std::abs(normal.x) > std::abs(normal.y)
+                         ? (std::abs(normal.x) > std::abs(normal.z) ? 0 : 2)
+                         : (std::abs(normal.y) > std::abs(normal.z) ? 1 : 2);
+    const int ax = (drop + 1) % 3, ay = (drop + 2) % 3;
+    const double sign = normal[drop] > 0 ? 1.0 : -1.0;
+    std::vector<glm::dvec2> p2(n);
+    for (size_t i = 0; i < n; ++i) p2[i] = glm::dvec2(pts[i][ax], pts[i][ay] * sign);
+    const uint32_t base = uint32_t(mesh_.positions.size());
+    for (const glm::dvec3& p : pts) mesh_.positions.push_back(glm::vec3(local * glm::dvec4(p, 1.0)));
+    std::vector<uint32_t> ring(n);
+    for (size_t i = 0; i < n; ++i) ring[i] = uint32_t(i);
+    auto cross2 = [](glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
+      return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+    };
+    size_t guard = 0;
+    while (ring.size() > 3 && guard++ < 4 * n) {
+      bool clipped = false;
+      for (size_t i = 0; i < ring.size(); ++i) {
+        const uint32_t a = ring[(i + ring.size() - 1) % ring.size()], b = ring[i],
+                       c = ring[(i + 1) % ring.size()];
+        if (cross2(p2[a], p2[b], p2[c]) <= 0) continue;
+        bool inside = false;
+        for (uint32_t q : ring) {
+          if (q == a || q == b || q == c) continue;
+          if (cross2(p2[a], p2[b], p2[q]) >= 0 && cross2(p2[b], p2[c], p2[q]) >= 0 &&
+              cross2(p2[c], p2[a], p2[q]) >= 0) {
+            inside = true;
+            break;
+          }
+        }
+        if (inside) continue;
+        mesh_.indices.insert(mesh_.indices.end(), {base + a, base + b, base + c});
+        ring.erase(ring.begin() + long(i));
+        clipped = true;
+        break;
+      }
+      if (!clipped) break;  // degenerate: fan the rest
+    }
+    for (size_t i = 1; i + 1 < ring.size(); ++i)
+      mesh_.indices.insert(mesh_.indices.end(), {base + ring[0], base + ring[i], base + ring[i + 1]});
+  }
+
+  void shell(const Step21Instance* s, const glm::dmat4& local) {
+    if (!s) throw ItemError{"a B-rep without a shell"};
+    for (const Step21Value& fv : arg(s, 0).items) {
+      const Step21Instance* face = f_.deref(fv);
+      if (!face) continue;
+      const auto& bounds = arg(face, 0).items;
+      for (const Step21Value& bv : bounds) {
+        const Step21Instance* bound = f_.deref(bv);
+        if (!bound) continue;
+        if (bound->type == "IFCFACEBOUND" && bounds.size() > 1) {
+          if (++face_holes_ == 1) warn("holes in faceted faces (IfcFaceBound) are filled");
+          continue;
+        }
+        const Step21Instance* loop = f_.deref(arg(bound, 0));
+        if (!loop || loop->type != "IFCPOLYLOOP") continue;
+        std::vector<glm::dvec3> pts;
+        for (const Step21Value& p : arg(loop, 0).items) pts.push_back(point(f_.deref(p)));
+        if (textOf(arg(bound, 1)) == "F") std::reverse(pts.begin(), pts.end());
+        polygon(pts, local);
+      }
+    }
+  }
+
+  std::vector<glm::dvec3> pointList(const Step21Instance* list) const {
+    std::vector<glm::dvec3> pts;
+    if (!list) throw ItemError{"a face set without coordinates"};
+    for (const Step21Value& c : arg(list, 0).items) {
+      glm::dvec3 p(0.0);
+      for (size_t i = 0; i < 3 && i < c.items.size(); ++i) p[int(i)] = numberOf(c.items[i], 0.0) * length_;
+      pts.push_back(p);
+    }
+    return pts;
+  }
+
+  // 1-based coordinate index, through PnIndex when the set has one.
+  static std::optional<size_t> coordinate(double index, const std::vector<size_t>& pn, size_t count) {
+    if (!(index >= 1.0) || index > 1e12) return std::nullopt;
+    size_t i = size_t(index) - 1;
+    if (!pn.empty()) {
+      if (i >= pn.size()) return std::nullopt;
+      i = pn[i] - 1;
+    }
+    return i < count ? std::optional<size_t>(i) : std::nullopt;
+  }
+
+  void polygonalFaceSet(const Step21Instance& item, const glm::dmat4& local) {
+    const std::vector<glm::dvec3> pts = pointList(f_.deref(arg(&item, 0)));
+    std::vector<size_t> pn;
+    for (const Step21Value& v : arg(&item, 3).items) pn.push_back(size_t(std::max(1.0, numberOf(v, 1))));
+    for (const Step21Value& fv : arg(&item, 2).items) {
+      const Step21Instance* face = f_.deref(fv);
+      if (!face) continue;
+      std::vector<glm::dvec3> polygon_pts;
+      for (const Step21Value& iv : arg(face, 0).items) {
+        const auto i = coordinate(numberOf(iv, 0), pn, pts.size());
+        if (!i) throw ItemError{"a face index outside the coordinates"};
+        polygon_pts.push_back(pts[*i]);
+      }
+      polygon(polygon_pts, local);
+    }
+  }
+
+  void triangulatedFaceSet(const Step21Instance& item, const glm::dmat4& local) {
+    const std::vector<glm::dvec3> pts = pointList(f_.deref(arg(&item, 0)));
+    std::vector<size_t> pn;
+    for (const Step21Value& v : arg(&item, 4).items) pn.push_back(size_t(std::max(1.0, numberOf(v, 1))));
+    const uint32_t base = uint32_t(mesh_.positions.size());
+    for (const glm::dvec3& p : pts) mesh_.positions.push_back(glm::vec3(local * glm::dvec4(p, 1.0)));
+    for (const Step21Value& t : arg(&item, 3).items) {
+      if (t.items.size() != 3) throw ItemError{"a triangle without three indices"};
+      uint32_t tri[3];
+      for (int k = 0; k < 3; ++k) {
+        const auto i = coordinate(numberOf(t.items[size_t(k)], 0), pn, pts.size());
+        if (!i) throw ItemError{"a triangle index outside the coordinates"};
+        tri[k] = base + uint32_t(*i);
+      }
+      mesh_.indices.insert(mesh_.indices.end(), {tri[0], tri[1], tri[2]});
+    }
+  }
+
+  const Step21File& f_;
+  SceneSink& sink_;
+  const ReadOptions& options_;
+  double length_ = 1.0;  // metres per file length unit
+  double angle_ = 1.0;   // radians per file angle unit
+  std::unordered_map<uint64_t, uint32_t> colours_;
+  std::unordered_map<uint64_t, std::string> layer_of_;
+  std::map<std::string, uint32_t> layers_;
+  uint32_t next_id_ = 0, products_ = 0;
+  int voids_ = 0, clippings_ = 0, skipped_warnings_ = 0, profile_voids_ = 0, face_holes_ = 0;
+  // The product being imported.
+  std::string product_type_;
+  TriangleMesh mesh_;
+  std::vector<std::pair<glm::dmat4, Primitive>> primitives_;
+  uint32_t colour_ = 0;
+};
+
+}  // namespace
+
+void readIfc(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
+  const Step21File file = Step21File::read(path);
+  if (file.schema().rfind("IFC", 0) != 0)
+    throw FormatError(path.string(), "not an IFC file: its FILE_SCHEMA is '" + file.schema() + "'");
+  IfcImporter importer(file, sink, options);
+  importer.run();
+  if (importer.objects() == 0)
+    throw FormatError(path.string(), "no product with geometry TeraWalk can read (" +
+                                         std::to_string(importer.products()) + " products tried)");
+}
+
+}  // namespace tw

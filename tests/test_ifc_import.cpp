@@ -1,0 +1,205 @@
+// The IFC importer on the real samples: the products with geometry (openings, spaces and
+// annotations not drawn) as counted from the files' text, one database key (GlobalId) each;
+// parametric geometry kept (the MEP pipes and bends, the CSG block); the three basic shapes, one
+// solid written three ways, in the same place; and the Part 21 reader's errors on damaged text.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include "format_error.h"
+#include "ifc_importer.h"
+#include "step21_file.h"
+#include "tessellate.h"
+#include "test_support.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+fs::path sample(const char* name) { return test::sharedDataDir() / name; }
+
+test::CollectingSink import(const fs::path& path, std::vector<std::string>* warnings = nullptr) {
+  test::CollectingSink sink;
+  ReadOptions options;
+  options.warn = [warnings](const std::string& w) {
+    if (warnings) warnings->push_back(w);
+  };
+  readIfc(path, sink, options);
+  return sink;
+}
+
+std::set<std::string> keys(const test::CollectingSink& sink) {
+  std::set<std::string> k;
+  for (const SceneObject& o : sink.objects) k.insert(o.info.db_key);
+  return k;
+}
+
+void worldBounds(const test::CollectingSink& sink, glm::dvec3& lo, glm::dvec3& hi) {
+  lo = glm::dvec3(1e300);
+  hi = glm::dvec3(-1e300);
+  for (const SceneObject& o : sink.objects) {
+    TriangleMesh mesh;
+    tessellate(o.geometry, 0.001f, mesh);
+    for (const glm::vec3& p : mesh.positions) {
+      lo = glm::min(lo, o.info.transform.apply(p));
+      hi = glm::max(hi, o.info.transform.apply(p));
+    }
+  }
+}
+
+// Products with a representation, by class, counted from the text (a Part 21 instance whose
+// first argument is a 22-character GlobalId and whose seventh is a reference), less openings,
+// spaces and annotations: TestModel 4 walls, 2 slabs, 2 doors, 7 windows, a stair flight, 2
+// members, 2 railings; acad2010 11 walls, 4 windows, 7 doors, a curtain wall, a roof, 8 columns,
+// 4 beams, a member, 2 stairs, 2 railings, 11 proxies; bcf-architectural 20 coverings, a slab, a
+// proxy, 14 walls, a door, a window, 25 members, 12 plates.
+TEST(IfcImport, EveryProductWithGeometryComesInWithItsGlobalId) {
+  const std::map<std::string, size_t> expected = {
+      {"TestModel_IFC4Add2.ifc", 20}, {"acad2010_objects.ifc", 52}, {"bcf-architectural.ifc", 75},
+      {"bcf-mep.ifc", 8},            {"cylinders.ifc", 4},         {"basic_shape_Brep.ifc", 1},
+      {"basic_shape_CSG.ifc", 1},    {"basic_shape_SweptSolid.ifc", 1}};
+  for (const auto& [file, products] : expected) {
+    const test::CollectingSink sink = import(sample(file.c_str()));
+    const std::set<std::string> k = keys(sink);
+    EXPECT_EQ(k.size(), products) << file;
+    for (const std::string& key : k) EXPECT_EQ(key.size(), 22u) << file << ": " << key;
+    glm::dvec3 lo, hi;
+    worldBounds(sink, lo, hi);
+    EXPECT_LT(glm::length(hi - lo), 200.0) << file << ": metres, not millimetres";
+  }
+}
+
+TEST(IfcImport, OneSolidWrittenAsBrepCsgAndSweptSolidLandsInOnePlace) {
+  for (const char* file : {"basic_shape_Brep.ifc", "basic_shape_CSG.ifc", "basic_shape_SweptSolid.ifc"}) {
+    const test::CollectingSink sink = import(sample(file));
+    glm::dvec3 lo, hi;
+    worldBounds(sink, lo, hi);
+    EXPECT_NEAR(lo.x, 0.5, 1e-6) << file;
+    EXPECT_NEAR(lo.y, -0.5, 1e-6) << file;
+    EXPECT_NEAR(lo.z, 0.0, 1e-6) << file;
+    EXPECT_NEAR(hi.x, 1.5, 1e-6) << file;
+    EXPECT_NEAR(hi.y, 0.5, 1e-6) << file;
+    EXPECT_NEAR(hi.z, 2.0, 1e-6) << file;
+  }
+  // The CSG block and the extruded rectangle stay boxes; the B-rep is a mesh.
+  EXPECT_TRUE(std::holds_alternative<Primitive>(import(sample("basic_shape_CSG.ifc")).objects[0].geometry));
+  EXPECT_TRUE(std::holds_alternative<Primitive>(import(sample("basic_shape_SweptSolid.ifc")).objects[0].geometry));
+  EXPECT_TRUE(std::holds_alternative<TriangleMesh>(import(sample("basic_shape_Brep.ifc")).objects[0].geometry));
+}
+
+TEST(IfcImport, PipesAndBendsStayParametric) {
+  const test::CollectingSink sink = import(sample("bcf-mep.ifc"));
+  std::map<size_t, int> kinds;
+  for (const SceneObject& o : sink.objects) {
+    const auto* p = std::get_if<Primitive>(&o.geometry);
+    ASSERT_NE(p, nullptr) << o.info.name << ": every MEP item is a primitive";
+    kinds[p->index()]++;
+  }
+  EXPECT_EQ(kinds[0], 5) << "extruded hollow circles: cylinders";
+  EXPECT_EQ(kinds[3], 3) << "revolved hollow circles: torus segments";
+  for (const SceneObject& o : sink.objects)
+    if (const auto* t = std::get_if<TorusSegment>(&std::get<Primitive>(o.geometry))) {
+      EXPECT_GT(t->major_radius, t->minor_radius);
+      EXPECT_GT(t->sweep_rad, 0.1f);
+      EXPECT_LE(t->sweep_rad, 6.2832f);
+    }
+  const test::CollectingSink cylinders = import(sample("cylinders.ifc"));
+  for (const SceneObject& o : cylinders.objects)
+    EXPECT_TRUE(std::holds_alternative<Cylinder>(std::get<Primitive>(o.geometry))) << o.info.name;
+}
+
+TEST(IfcImport, LayersComeFromTheLayerAssignmentOrTheClass) {
+  auto layerObjects = [](const test::CollectingSink& sink) {
+    std::map<std::string, int> counts;
+    for (const SceneObject& o : sink.objects) counts[sink.layers[o.info.layer].name]++;
+    return counts;
+  };
+  // IfcPresentationLayerAssignment: TestModel's four walls on its wall layer.
+  EXPECT_EQ(layerObjects(import(sample("TestModel_IFC4Add2.ifc")))["A-WALL-____-OTLN"], 4);
+  EXPECT_EQ(layerObjects(import(sample("bcf-mep.ifc")))["Supply air"], 8);
+  // None in the file: the IFC class.
+  EXPECT_EQ(layerObjects(import(sample("cylinders.ifc")))["IFCBUILDINGELEMENTPROXY"], 4);
+}
+
+TEST(IfcImport, WhatIsNotReadIsAWarningNamingIt) {
+  std::vector<std::string> warnings;
+  import(sample("bcf-architectural.ifc"), &warnings);
+  bool openings = false, clippings = false;
+  for (const std::string& w : warnings) {
+    EXPECT_NE(w.find("bcf-architectural.ifc: "), std::string::npos) << w;
+    openings |= w.find("3 openings (IfcRelVoidsElement) are not cut") != std::string::npos;
+    clippings |= w.find("8 boolean results keep their first operand only") != std::string::npos;
+  }
+  EXPECT_TRUE(openings);
+  EXPECT_TRUE(clippings);
+}
+
+TEST(IfcImport, Part21ErrorsNameTheLine) {
+  auto rejects = [](const std::string& text, uint64_t line, const char* reason) {
+    try {
+      Step21File::parse(text, "t.ifc");
+      ADD_FAILURE() << reason << ": accepted";
+    } catch (const FormatError& e) {
+      EXPECT_EQ(e.file(), "t.ifc");
+      EXPECT_EQ(e.position(), line) << e.what();
+      EXPECT_NE(e.reason().find(reason), std::string::npos) << e.what();
+    }
+  };
+  const std::string head = "ISO-10303-21;\nHEADER;\nFILE_SCHEMA(('IFC4'));\nENDSEC;\nDATA;\n";
+  const Step21File ok = Step21File::parse(
+      head + "#1=IFCLABEL2('it''s \\X2\\00E9\\X0\\',(1,2.5E1,-3.),.T.,$,*,#2,IFCLABEL('x'));\n" +
+          "#2=(A(1)B(2));\nENDSEC;\nEND-ISO-10303-21;\n",
+      "t.ifc");
+  EXPECT_EQ(ok.schema(), "IFC4");
+  const Step21Instance* one = ok.find(1);
+  ASSERT_NE(one, nullptr);
+  ASSERT_EQ(one->args.size(), 7u);
+  EXPECT_EQ(one->args[0].text, "it's \xc3\xa9");
+  EXPECT_DOUBLE_EQ(one->args[1].items[1].number, 25.0);
+  EXPECT_EQ(one->args[2].text, "T");
+  EXPECT_TRUE(one->args[3].isNull());
+  EXPECT_EQ(ok.deref(one->args[5]), ok.find(2));
+  EXPECT_EQ(one->args[6].text, "IFCLABEL");
+  EXPECT_EQ(ok.find(2)->type, "A");
+  rejects("hello", 1, "does not start with ISO-10303-21");
+  rejects(head + "#1=IFCWALL('abc);\n", 6, "unterminated string");
+  rejects(head + "#1=IFCWALL((1,2);\n", 6, "expected ',' or ')'");
+  rejects(head + "#1=IFCWALL(1);\n#1=IFCWALL(2);\n", 7, "defined twice");
+  rejects(head + "#1=IFCWALL(1);\n", 7, "ends inside the DATA section");
+  rejects(head + "#1=IFCWALL(" + std::string(100, '(') + ");\n", 6, "nested too deep");
+}
+
+TEST(IfcImport, TruncatedAndCorruptedFilesGiveAFormatErrorOrAScene) {
+  const std::string original = test::readFile(sample("basic_shape_SweptSolid.ifc"));
+  const int rejected = test::expectRobustToDamage(
+      original, "damaged.ifc",
+      [](const fs::path& p, SceneSink& sink) {
+        ReadOptions quiet;
+        quiet.warn = [](const std::string&) {};
+        readIfc(p, sink, quiet);
+      },
+      300);
+  EXPECT_GT(rejected, 250) << "every truncation loses END-ISO-10303-21";
+}
+
+// A placement chain that loops is followed to a bounded depth, not forever.
+TEST(IfcImport, PlacementLoopDoesNotHang) {
+  std::string text = test::readFile(sample("basic_shape_SweptSolid.ifc"));
+  // Make the product's placement relative to itself.
+  const size_t at = text.find("IFCLOCALPLACEMENT(");
+  ASSERT_NE(at, std::string::npos);
+  const size_t hash = text.rfind('#', at);
+  const std::string id = text.substr(hash, text.find('=', hash) - hash);
+  const size_t open = at + std::string("IFCLOCALPLACEMENT(").size();
+  const size_t comma = text.find(',', open);
+  text.replace(open, comma - open, id);
+  const fs::path path = test::scratchDir() / "loop.ifc";
+  test::writeFile(path, text);
+  const test::CollectingSink sink = import(path);
+  EXPECT_EQ(sink.objects.size(), 1u);
+}
+
+}  // namespace
+}  // namespace tw
