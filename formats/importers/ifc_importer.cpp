@@ -62,7 +62,7 @@ class IfcImporter {
       const Step21Instance& in = *f_.find(id);
       if (!isDrawnProduct(in)) continue;
       ++products_;
-      importProduct(id, in);
+      importProduct(in);
     }
     if (voids_ > 0)
       warn(std::to_string(voids_) + " openings (IfcRelVoidsElement) are not cut from their hosts");
@@ -251,7 +251,7 @@ class IfcImporter {
     return placement(f_.deref(arg(p, 0)), depth + 1) * axisPlacement(f_.deref(arg(p, 1)));
   }
 
-  void importProduct(uint64_t id, const Step21Instance& product) {
+  void importProduct(const Step21Instance& product) {
     ObjectInfo info;
     info.name = textOf(product.args[2]);
     if (info.name.empty()) info.name = product.type;
@@ -416,7 +416,7 @@ class IfcImporter {
   // it (a cylinder scaled unevenly across its axis) is an error.
   void add(const glm::dmat4& local, Primitive primitive) {
     glm::dmat4 rigid = local;
-    glm::dvec3 s;
+    glm::dvec3 s(1.0);
     for (int a = 0; a < 3; ++a) {
       s[a] = glm::length(glm::dvec3(local[a]));
       if (!(s[a] > 1e-12)) throw ItemError{"a placement that flattens the item"};
