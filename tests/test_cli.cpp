@@ -409,8 +409,8 @@ TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {
   EXPECT_NE(pick.output.find("layer       256"), std::string::npos) << pick.output;
 }
 
-// Every IFC sample preprocesses and verifies; a pick on TestModel's wall names it by its
-// GlobalId and its layer.
+// Every IFC sample preprocesses and verifies; a pick on a wall names it by its GlobalId and
+// layer and shows its class and property sets.
 TEST(Cli, IfcSamplesPreprocessVerifyAndPickAWallByItsGlobalId) {
   const auto dir = test::scratchDir();
   for (const char* name : {"TestModel_IFC4Add2", "acad2010_objects", "basic_shape_Brep",
@@ -431,6 +431,19 @@ TEST(Cli, IfcSamplesPreprocessVerifyAndPickAWallByItsGlobalId) {
   EXPECT_NE(pick.output.find("db key      37cU2nGL100xirW00wMfmm"), std::string::npos) << pick.output;
   EXPECT_NE(pick.output.find("layer       A-WALL-____-OTLN"), std::string::npos) << pick.output;
   EXPECT_NE(pick.output.find("Basic Wall"), std::string::npos) << pick.output;
+  // The preprocessor wrote the products' records and property sets next to the package, and
+  // the pick reads them there: class, storey, quantities and the authoring tool's attributes.
+  ASSERT_TRUE(std::filesystem::exists(dir / "bcf-architectural.db"));
+  RunResult wall = run("pick " + (dir / "bcf-architectural.twk").string() +
+                       " --eye 9,-40,8 --target 9,-12,7 --pixel 600,400");
+  ASSERT_EQ(wall.exit_code, 0) << wall.output;
+  EXPECT_NE(wall.output.find("db key      2k7AL9Q4vAfOld2Ju8s3DV"), std::string::npos) << wall.output;
+  EXPECT_NE(wall.output.find("IFC / Class = IFCWALLSTANDARDCASE"), std::string::npos) << wall.output;
+  EXPECT_NE(wall.output.find("IFC / Storey = 3.Nadzemn"), std::string::npos) << wall.output;
+  EXPECT_NE(wall.output.find("WallQuantities / NominalLength = 4 METRE"), std::string::npos)
+      << wall.output;
+  EXPECT_NE(wall.output.find("Allplan Attributes / Object_name = Mehrsch-Wand"), std::string::npos)
+      << wall.output;
 }
 
 // Pixels of one object in an ids_NNNNN.png: their count, mean row and bounding box.

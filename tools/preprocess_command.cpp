@@ -7,10 +7,31 @@
 #include "command.h"
 #include "command_args.h"
 #include "preprocess_driver.h"
+#include "ifc_importer.h"
 #include "project_database.h"
+#include "scene_io.h"
 
 namespace tw {
 namespace {
+
+// IFC inputs carry what a reviewer reads when picking (class, storey, property sets): without
+// --db, they go into a project database next to the package (model.twk -> model.db), which the
+// package then names. Empty when no input is IFC.
+std::filesystem::path ifcDatabase(const std::vector<std::filesystem::path>& inputs,
+                                  const std::filesystem::path& output) {
+  std::vector<std::filesystem::path> ifc;
+  for (const auto& input : inputs)
+    if (sceneFormatOf(input) == SceneFormat::Ifc) ifc.push_back(input);
+  if (ifc.empty()) return {};
+  std::filesystem::path db = output;
+  db.replace_extension(".db");
+  ProjectDatabase database = ProjectDatabase::create(db);
+  uint64_t products = 0;
+  for (const auto& input : ifc) products += writeIfcProperties(input, database);
+  std::printf("database    %s: %llu IFC products with their property sets\n", db.string().c_str(),
+              static_cast<unsigned long long>(products));
+  return db;
+}
 
 struct PreprocessArgs {
   std::vector<std::string> inputs;
@@ -167,6 +188,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.cad_primitives = args->cad_primitives == "on";
     options.cad_tolerance_m = args->cad_tolerance_m;
     options.database = args->db;
+    if (options.database.empty()) options.database = ifcDatabase(options.inputs, options.output);
     PreprocessReport report = runPreprocess(options);
     printSummary(report, args->output);
   });

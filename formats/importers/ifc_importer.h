@@ -35,4 +35,13 @@ namespace tw {
 
 void readIfc(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options = {});
 
+class ProjectDatabase;
+
+// What IFC knows of each drawn product, into the project database under its GlobalId: a record
+// (type: the IFC class, description: its Name) and properties: set "IFC" (Class, Name, Storey,
+// ObjectType), its property sets (IfcPropertySingleValue and enumerated values, with units) and
+// quantities (IfcElementQuantity). Returns the number of products written. Throws FormatError as
+// readIfc does.
+uint64_t writeIfcProperties(const std::filesystem::path& path, ProjectDatabase& database);
+
 }  // namespace tw
