@@ -331,7 +331,7 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
   auto options = std::make_shared<InfoOptions>();
   CLI::App* cmd = app.add_subcommand("info", "Print what a scene file or package holds");
   cmd->add_option("file", options->file,
-                  "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb) or package (.twk)")
+                  "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb, .stp, .step, .ifc) or package (.twk)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_flag("--json", options->json, "Machine-readable output");

@@ -120,7 +120,7 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
 void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   auto args = std::make_shared<PreprocessArgs>();
   CLI::App* cmd = app.add_subcommand("preprocess", "Build a walkable package from scene files");
-  cmd->add_option("inputs", args->inputs, "Scene files (.tws, .ply, .obj, .stl, .gltf, .glb)")
+  cmd->add_option("inputs", args->inputs, "Scene files (.tws, .ply, .obj, .stl, .gltf, .glb, .stp, .step, .ifc)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--output", args->output, "Package to write (.twk)")->required();

@@ -34,7 +34,7 @@ struct SnapshotCommandOptions {
 void registerSnapshotCommand(CLI::App& app, const GlobalOptions& global) {
   auto o = std::make_shared<SnapshotCommandOptions>();
   CLI::App* cmd = app.add_subcommand("snapshot", "Render a CPU ray-cast picture (PNG) of a scene file");
-  cmd->add_option("file", o->file, "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb)")
+  cmd->add_option("file", o->file, "Scene file (.tws, .ply, .obj, .stl, .gltf, .glb, .stp, .step, .ifc)")
       ->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("-o,--out", o->out, "Output PNG")->required();
