@@ -184,6 +184,19 @@ TEST(IfcImport, TruncatedAndCorruptedFilesGiveAFormatErrorOrAScene) {
   EXPECT_GT(rejected, 250) << "every truncation loses END-ISO-10303-21";
 }
 
+// The same on a real building model (200 KB): references, lists and numbers damaged anywhere.
+TEST(IfcImport, DamagedBuildingModelGivesAFormatErrorOrAScene) {
+  const std::string original = test::readFile(sample("TestModel_IFC4Add2.ifc"));
+  test::expectRobustToDamage(
+      original, "damaged_building.ifc",
+      [](const fs::path& p, SceneSink& sink) {
+        ReadOptions quiet;
+        quiet.warn = [](const std::string&) {};
+        readIfc(p, sink, quiet);
+      },
+      200);
+}
+
 // A placement chain that loops is followed to a bounded depth, not forever.
 TEST(IfcImport, PlacementLoopDoesNotHang) {
   std::string text = test::readFile(sample("basic_shape_SweptSolid.ifc"));
