@@ -542,8 +542,12 @@ Translation translateInChild(const std::filesystem::path& path, const ReadOption
                                 strsignal(WTERMSIG(status)) +
                                 "): it is damaged or holds what OpenCASCADE cannot read");
   if (!error.empty()) throw FormatError(file, error);
+  // The child exits 0 whatever it read (errors come over the pipe), so any other status is a
+  // crash that a handler turned into an exit (a sanitizer's, for one).
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0)
-    throw FormatError(file, "the STEP translation process failed");
+    throw FormatError(file, "OpenCASCADE crashed translating the file (exit status " +
+                                std::to_string(WIFEXITED(status) ? WEXITSTATUS(status) : -1) +
+                                "): it is damaged or holds what OpenCASCADE cannot read");
   return done;
 }
 
