@@ -9,6 +9,7 @@
 
 #include "format_error.h"
 #include "ifc_importer.h"
+#include "profile_prism.h"
 #include "step21_file.h"
 #include "tessellate.h"
 #include "test_support.h"
@@ -195,6 +196,46 @@ TEST(IfcImport, DamagedBuildingModelGivesAFormatErrorOrAScene) {
         readIfc(p, sink, quiet);
       },
       200);
+}
+
+double triangleArea(const std::vector<glm::dvec2>& p, const std::vector<uint32_t>& t) {
+  double area = 0.0;
+  for (size_t i = 0; i < t.size(); i += 3) {
+    const glm::dvec2 a = p[t[i]], b = p[t[i + 1]], c = p[t[i + 2]];
+    area += 0.5 * ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+  }
+  return area;
+}
+
+// A 4 x 3 plate with a 1 x 1 hole and a triangular one: the caps cover exactly the plate less
+// the holes, every triangle counter-clockwise; the prism is closed (each edge used twice, once
+// each way) whatever way the loops were wound.
+TEST(ProfilePrism, HolesAreCutAndThePrismIsClosed) {
+  std::vector<glm::dvec2> outer{{0, 0}, {4, 0}, {4, 3}, {0, 3}};
+  std::vector<std::vector<glm::dvec2>> holes{{{1, 1}, {2, 1}, {2, 2}, {1, 2}},
+                                             {{3, 0.5}, {3.5, 0.5}, {3.25, 2.5}}};
+  for (int winding = 0; winding < 2; ++winding) {
+    if (winding == 1) {
+      std::reverse(outer.begin(), outer.end());
+      for (auto& h : holes) std::reverse(h.begin(), h.end());
+    }
+    std::vector<glm::dvec2> all(outer);
+    for (const auto& h : holes) all.insert(all.end(), h.begin(), h.end());
+    const std::vector<uint32_t> cap = triangulateProfile(outer, holes);
+    EXPECT_NEAR(triangleArea(all, cap), 12.0 - 1.0 - 0.5 * 0.5 * 2.0, 1e-9) << winding;
+    for (size_t i = 0; i < cap.size(); i += 3)
+      EXPECT_GT(triangleArea(all, {cap[i], cap[i + 1], cap[i + 2]}), 0.0);
+
+    TriangleMesh prism;
+    ASSERT_GT(appendProfilePrism(outer, holes, glm::dvec3(0.5, 0, 2), prism), 0u);
+    std::map<std::pair<uint32_t, uint32_t>, int> directed;
+    for (size_t i = 0; i < prism.indices.size(); i += 3)
+      for (int k = 0; k < 3; ++k) directed[{prism.indices[i + k], prism.indices[i + (k + 1) % 3]}]++;
+    for (const auto& [edge, count] : directed) {
+      EXPECT_EQ(count, 1) << edge.first << "-" << edge.second;
+      EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << edge.first << "-" << edge.second;
+    }
+  }
 }
 
 // A placement chain that loops is followed to a bounded depth, not forever.

@@ -14,6 +14,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "format_error.h"
+#include "profile_prism.h"
 #include "project_database.h"
 #include "step21_file.h"
 #include "tessellate.h"
@@ -529,15 +530,65 @@ class IfcImporter {
     return pts;
   }
 
+  // A profile as loops in the extrusion's plane (its own 2D placement applied): the outer one
+  // and its holes. Circles become 48-gons.
+  void profileLoops(const Step21Instance* profile, std::vector<glm::dvec2>& outer,
+                    std::vector<std::vector<glm::dvec2>>& holes) const {
+    const std::string& t = profile->type;
+    auto placed = [&](std::vector<glm::dvec2> pts) {
+      const glm::dmat4 plane = axisPlacement(f_.deref(arg(profile, 2)));
+      for (glm::dvec2& p : pts) p = glm::dvec2(plane * glm::dvec4(p, 0.0, 1.0));
+      return pts;
+    };
+    if (t == "IFCRECTANGLEPROFILEDEF" || t == "IFCRECTANGLEHOLLOWPROFILEDEF" ||
+        t == "IFCROUNDEDRECTANGLEPROFILEDEF") {
+      const double x = 0.5 * numberOf(arg(profile, 3), 0) * length_;
+      const double y = 0.5 * numberOf(arg(profile, 4), 0) * length_;
+      if (!(x > 0 && y > 0)) throw ItemError{"a rectangle without area"};
+      outer = placed({{-x, -y}, {x, -y}, {x, y}, {-x, y}});
+    } else if (t == "IFCCIRCLEPROFILEDEF" || t == "IFCCIRCLEHOLLOWPROFILEDEF") {
+      const double r = numberOf(arg(profile, 3), 0) * length_;
+      if (!(r > 0)) throw ItemError{"a circle without radius"};
+      std::vector<glm::dvec2> circle;
+      for (int i = 0; i < 48; ++i) {
+        const double a = 2.0 * std::numbers::pi * i / 48.0;
+        circle.push_back(r * glm::dvec2(std::cos(a), std::sin(a)));
+      }
+      outer = placed(circle);
+    } else if (t == "IFCARBITRARYCLOSEDPROFILEDEF" || t == "IFCARBITRARYPROFILEDEFWITHVOIDS") {
+      outer = curvePoints(f_.deref(arg(profile, 2)));
+      if (t == "IFCARBITRARYPROFILEDEFWITHVOIDS")
+        for (const Step21Value& inner : arg(profile, 3).items) holes.push_back(curvePoints(f_.deref(inner)));
+    } else {
+      throw ItemError{"profile " + t + " is not read"};
+    }
+  }
+
   void extruded(const Step21Instance& item, const glm::dmat4& local) {
     const Step21Instance* profile = f_.deref(arg(&item, 0));
     const glm::dmat4 at = local * axisPlacement(f_.deref(arg(&item, 1)));
     const glm::dvec3 dir = direction(f_.deref(arg(&item, 2))).value_or(glm::dvec3(0, 0, 1));
     const double depth = numberOf(arg(&item, 3), 0.0) * length_;
     if (!(depth > 0.0)) throw ItemError{"an extrusion without depth"};
-    if (std::abs(dir.z - 1.0) > 1e-6) throw ItemError{"an oblique extrusion is not read"};
     if (!profile) throw ItemError{"an extrusion without a profile"};
     const std::string& t = profile->type;
+    const bool straight = std::abs(dir.z - 1.0) <= 1e-6;
+    const bool voids = t == "IFCARBITRARYPROFILEDEFWITHVOIDS" && !arg(profile, 3).items.empty();
+    if (!straight || voids) {
+      // No primitive holds it: a mesh prism of the profile and its holes along the direction.
+      if (!(dir.z > 1e-6)) throw ItemError{"an extrusion along its own profile plane"};
+      std::vector<glm::dvec2> outer;
+      std::vector<std::vector<glm::dvec2>> holes;
+      profileLoops(profile, outer, holes);
+      TriangleMesh prism;
+      if (appendProfilePrism(outer, holes, dir * depth, prism) == 0)
+        throw ItemError{"a profile that does not triangulate"};
+      const uint32_t base = uint32_t(mesh_.positions.size());
+      for (const glm::vec3& p : prism.positions)
+        mesh_.positions.push_back(glm::vec3(at * glm::dvec4(glm::dvec3(p), 1.0)));
+      for (uint32_t i : prism.indices) mesh_.indices.push_back(base + i);
+      return;
+    }
     const glm::dmat4 plane = at * axisPlacement(f_.deref(arg(profile, 2)));
     if (t == "IFCRECTANGLEPROFILEDEF" || t == "IFCRECTANGLEHOLLOWPROFILEDEF" ||
         t == "IFCROUNDEDRECTANGLEPROFILEDEF") {
@@ -550,8 +601,6 @@ class IfcImporter {
       if (!(r > 0)) throw ItemError{"a circle without radius"};
       add(plane, Cylinder{float(r), float(depth), true});
     } else if (t == "IFCARBITRARYCLOSEDPROFILEDEF" || t == "IFCARBITRARYPROFILEDEFWITHVOIDS") {
-      if (t == "IFCARBITRARYPROFILEDEFWITHVOIDS" && ++profile_voids_ == 1)
-        warn("the voids of profiles (IfcArbitraryProfileDefWithVoids) are filled");
       Extrusion e;
       for (const glm::dvec2& p : curvePoints(f_.deref(arg(profile, 2)))) e.profile.push_back(glm::vec2(p));
       e.height = float(depth);
