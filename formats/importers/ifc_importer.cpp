@@ -115,7 +115,7 @@ class IfcImporter {
       for (const Step21Value& u : arg(f_.find(id), 0).items) {
         const Step21Instance* unit = f_.deref(u);
         if (!unit) continue;
-        const std::string type = textOf(arg(unit, unit->type == "IFCSIUNIT" ? 1 : 1));
+        const std::string type = textOf(arg(unit, 1));  // UnitType, in both kinds of unit
         const double scale = unitScale(unit, 0);
         if (scale <= 0.0) continue;
         if (type == "LENGTHUNIT") length_ = scale;
@@ -173,10 +173,7 @@ class IfcImporter {
         for (const Step21Value& item : arg(layer, 2).items)
           if (item.kind == Kind::Ref) layer_of_.emplace(item.ref, name);
       }
-    for (uint64_t id : f_.idsOfType("IFCRELVOIDSELEMENT")) {
-      (void)id;
-      ++voids_;
-    }
+    voids_ = int(f_.idsOfType("IFCRELVOIDSELEMENT").size());
   }
 
   uint32_t layerIndex(const std::string& name) {
