@@ -57,6 +57,7 @@ class IfcImporter {
     readUnits();
     readStyles();
     readLayers();
+    voids_ = int(f_.idsOfType("IFCRELVOIDSELEMENT").size());  // not cut (see the header)
     std::vector<uint64_t> ids;
     for (const auto& [id, instance] : f_.instances()) ids.push_back(id);
     std::sort(ids.begin(), ids.end());
@@ -173,7 +174,6 @@ class IfcImporter {
         for (const Step21Value& item : arg(layer, 2).items)
           if (item.kind == Kind::Ref) layer_of_.emplace(item.ref, name);
       }
-    voids_ = int(f_.idsOfType("IFCRELVOIDSELEMENT").size());
   }
 
   uint32_t layerIndex(const std::string& name) {
