@@ -7,7 +7,7 @@
 #include "command.h"
 #include "command_args.h"
 #include "preprocess_driver.h"
-#include "ifc_importer.h"
+#include "ifc_properties.h"
 #include "project_database.h"
 #include "scene_io.h"
 

@@ -15,7 +15,6 @@
 
 #include "format_error.h"
 #include "profile_prism.h"
-#include "project_database.h"
 #include "step21_file.h"
 #include "tessellate.h"
 
@@ -25,23 +24,9 @@ namespace {
 using Kind = Step21Value::Kind;
 constexpr int kMaxDepth = 32;  // placement chains, mapped items, boolean trees
 
-const Step21Value& nullValue() {
-  static const Step21Value v;
-  return v;
-}
-const Step21Value& arg(const Step21Instance* in, size_t i) {
-  return in && i < in->args.size() ? in->args[i] : nullValue();
-}
-double numberOf(const Step21Value& v, double fallback) {
-  if (v.isNumber()) return v.number;
-  if (v.kind == Kind::Typed && !v.items.empty() && v.items[0].isNumber()) return v.items[0].number;
-  return fallback;
-}
-std::string textOf(const Step21Value& v) {
-  if (v.kind == Kind::String || v.kind == Kind::Enum) return v.text;
-  if (v.kind == Kind::Typed && !v.items.empty()) return textOf(v.items[0]);
-  return "";
-}
+using part21::arg;
+using part21::numberOf;
+using part21::textOf;
 
 // A geometry failure of one item: skipped with a warning, the rest imports.
 struct ItemError {
@@ -63,7 +48,7 @@ class IfcImporter {
     std::sort(ids.begin(), ids.end());
     for (uint64_t id : ids) {
       const Step21Instance& in = *f_.find(id);
-      if (!isDrawnProduct(in)) continue;
+      if (!isDrawnIfcProduct(f_, in)) continue;
       ++products_;
       importProduct(in);
     }
@@ -183,20 +168,6 @@ class IfcImporter {
   }
 
   // --- Products ------------------------------------------------------------------------------
-  // IfcProduct's attributes: GlobalId, OwnerHistory, Name, Description, ObjectType,
-  // ObjectPlacement, Representation. Its subtypes are recognized by that shape, so every class
-  // of both schemas is read without a schema table.
-  bool isDrawnProduct(const Step21Instance& in) const {
-    static const std::unordered_set<std::string> not_drawn = {
-        "IFCOPENINGELEMENT", "IFCOPENINGSTANDARDCASE", "IFCSPACE", "IFCANNOTATION", "IFCGRID",
-        "IFCVIRTUALELEMENT", "IFCSITE"};
-    if (in.args.size() < 7 || not_drawn.count(in.type)) return false;
-    if (in.args[0].kind != Kind::String || in.args[0].text.size() != 22) return false;
-    const Step21Instance* shape = f_.deref(in.args[6]);
-    return shape && (shape->type == "IFCPRODUCTDEFINITIONSHAPE" ||
-                     shape->type == "IFCPRODUCTREPRESENTATION");
-  }
-
   glm::dvec3 point(const Step21Instance* p) const {
     glm::dvec3 out(0.0);
     if (!p || p->type != "IFCCARTESIANPOINT") return out;
@@ -481,11 +452,7 @@ class IfcImporter {
     }
     if (pts.size() > 1 && glm::length(pts.front() - pts.back()) < 1e-9) pts.pop_back();
     if (pts.size() < 3) throw ItemError{"a profile of fewer than three points"};
-    double area2 = 0.0;
-    for (size_t i = 0; i < pts.size(); ++i) {
-      const glm::dvec2 a = pts[i], b = pts[(i + 1) % pts.size()];
-      area2 += a.x * b.y - b.x * a.y;
-    }
+    const double area2 = loopArea2(pts);
     if (std::abs(area2) < 1e-18) throw ItemError{"a profile without area"};
     if (area2 < 0.0) std::reverse(pts.begin(), pts.end());
     return pts;
@@ -664,7 +631,9 @@ class IfcImporter {
   }
 
   // --- Meshes --------------------------------------------------------------------------------
-  // Appends a planar polygon, triangulated by ear clipping in its best-fitting plane.
+  // Appends a planar polygon, triangulated in its best-fitting plane: projected along its
+  // normal's largest axis, wound so its own winding is counter-clockwise there, so the
+  // triangles keep the face's orientation.
   void polygon(const std::vector<glm::dvec3>& pts, const glm::dmat4& local) {
     const size_t n = pts.size();
     if (n < 3) return;
@@ -680,37 +649,7 @@ class IfcImporter {
     for (size_t i = 0; i < n; ++i) p2[i] = glm::dvec2(pts[i][ax], pts[i][ay] * sign);
     const uint32_t base = uint32_t(mesh_.positions.size());
     for (const glm::dvec3& p : pts) mesh_.positions.push_back(glm::vec3(local * glm::dvec4(p, 1.0)));
-    std::vector<uint32_t> ring(n);
-    for (size_t i = 0; i < n; ++i) ring[i] = uint32_t(i);
-    auto cross2 = [](glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) {
-      return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
-    };
-    size_t guard = 0;
-    while (ring.size() > 3 && guard++ < 4 * n) {
-      bool clipped = false;
-      for (size_t i = 0; i < ring.size(); ++i) {
-        const uint32_t a = ring[(i + ring.size() - 1) % ring.size()], b = ring[i],
-                       c = ring[(i + 1) % ring.size()];
-        if (cross2(p2[a], p2[b], p2[c]) <= 0) continue;
-        bool inside = false;
-        for (uint32_t q : ring) {
-          if (q == a || q == b || q == c) continue;
-          if (cross2(p2[a], p2[b], p2[q]) >= 0 && cross2(p2[b], p2[c], p2[q]) >= 0 &&
-              cross2(p2[c], p2[a], p2[q]) >= 0) {
-            inside = true;
-            break;
-          }
-        }
-        if (inside) continue;
-        mesh_.indices.insert(mesh_.indices.end(), {base + a, base + b, base + c});
-        ring.erase(ring.begin() + long(i));
-        clipped = true;
-        break;
-      }
-      if (!clipped) break;  // degenerate: fan the rest
-    }
-    for (size_t i = 1; i + 1 < ring.size(); ++i)
-      mesh_.indices.insert(mesh_.indices.end(), {base + ring[0], base + ring[i], base + ring[i + 1]});
+    for (uint32_t i : triangulateProfile(p2, {})) mesh_.indices.push_back(base + i);
   }
 
   void shell(const Step21Instance* s, const glm::dmat4& local) {
@@ -812,6 +751,20 @@ class IfcImporter {
 
 }  // namespace
 
+// IfcProduct's attributes: GlobalId, OwnerHistory, Name, Description, ObjectType,
+// ObjectPlacement, Representation. Its subtypes are recognized by that shape, so every class of
+// both schemas is read without a schema table.
+bool isDrawnIfcProduct(const Step21File& file, const Step21Instance& in) {
+  static const std::unordered_set<std::string> not_drawn = {
+      "IFCOPENINGELEMENT", "IFCOPENINGSTANDARDCASE", "IFCSPACE", "IFCANNOTATION", "IFCGRID",
+      "IFCVIRTUALELEMENT", "IFCSITE"};
+  if (in.args.size() < 7 || not_drawn.count(in.type)) return false;
+  if (in.args[0].kind != Kind::String || in.args[0].text.size() != 22) return false;
+  const Step21Instance* shape = file.deref(in.args[6]);
+  return shape && (shape->type == "IFCPRODUCTDEFINITIONSHAPE" ||
+                   shape->type == "IFCPRODUCTREPRESENTATION");
+}
+
 void readIfc(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options) {
   const Step21File file = Step21File::read(path);
   if (file.schema().rfind("IFC", 0) != 0)
@@ -821,119 +774,6 @@ void readIfc(const std::filesystem::path& path, SceneSink& sink, const ReadOptio
   if (importer.objects() == 0)
     throw FormatError(path.string(), "no product with geometry TeraWalk can read (" +
                                          std::to_string(importer.products()) + " products tried)");
-}
-
-namespace {
-
-// A property's value as text: numbers as written, booleans and logicals as words, labels as
-// themselves; lists joined by ", ".
-std::string valueText(const Step21Value& v) {
-  switch (v.kind) {
-    case Kind::Integer: return std::to_string(int64_t(v.number));
-    case Kind::Real: {
-      char buffer[32];
-      std::snprintf(buffer, sizeof buffer, "%.10g", v.number);
-      return buffer;
-    }
-    case Kind::String: return v.text;
-    case Kind::Enum: return v.text == "T" ? "true" : v.text == "F" ? "false" : v.text;
-    case Kind::Typed: return v.items.empty() ? "" : valueText(v.items[0]);
-    case Kind::List: {
-      std::string out;
-      for (const Step21Value& item : v.items) out += (out.empty() ? "" : ", ") + valueText(item);
-      return out;
-    }
-    default: return "";
-  }
-}
-
-// A unit's short name: the SI name with its prefix, or a conversion-based unit's name.
-std::string unitText(const Step21File& f, const Step21Value& v) {
-  const Step21Instance* unit = f.deref(v);
-  if (!unit) return "";
-  if (unit->type == "IFCSIUNIT") return textOf(arg(unit, 2)) + textOf(arg(unit, 3));
-  if (unit->type == "IFCCONVERSIONBASEDUNIT") return textOf(arg(unit, 2));
-  return "";
-}
-
-}  // namespace
-
-uint64_t writeIfcProperties(const std::filesystem::path& path, ProjectDatabase& database) {
-  const Step21File f = Step21File::read(path);
-  if (f.schema().rfind("IFC", 0) != 0)
-    throw FormatError(path.string(), "not an IFC file: its FILE_SCHEMA is '" + f.schema() + "'");
-  // The drawn products (the importer's rule), by id.
-  std::unordered_map<uint64_t, std::string> keys;
-  for (const auto& [id, in] : f.instances()) {
-    if (in.args.size() < 7 || in.args[0].kind != Kind::String || in.args[0].text.size() != 22)
-      continue;
-    const Step21Instance* shape = f.deref(in.args[6]);
-    if (!shape || (shape->type != "IFCPRODUCTDEFINITIONSHAPE" && shape->type != "IFCPRODUCTREPRESENTATION"))
-      continue;
-    if (in.type == "IFCOPENINGELEMENT" || in.type == "IFCSPACE" || in.type == "IFCANNOTATION")
-      continue;
-    keys.emplace(id, in.args[0].text);
-  }
-  std::vector<uint64_t> ids;
-  for (const auto& [id, key] : keys) ids.push_back(id);
-  std::sort(ids.begin(), ids.end());
-  for (uint64_t id : ids) {
-    const Step21Instance& in = *f.find(id);
-    ProjectRecord record;
-    record.db_key = keys[id];
-    record.type = in.type;
-    record.description = textOf(in.args[2]);
-    database.put(record);
-    database.putProperty({record.db_key, "IFC", "Class", in.type, ""});
-    if (!record.description.empty())
-      database.putProperty({record.db_key, "IFC", "Name", record.description, ""});
-    if (const std::string type = textOf(in.args[4]); !type.empty())
-      database.putProperty({record.db_key, "IFC", "ObjectType", type, ""});
-  }
-  // The storey (or other spatial structure) containing each product.
-  for (uint64_t rel : f.idsOfType("IFCRELCONTAINEDINSPATIALSTRUCTURE")) {
-    const Step21Instance* r = f.find(rel);
-    const Step21Instance* structure = f.deref(arg(r, 5));
-    if (!structure) continue;
-    const std::string name = textOf(arg(structure, 2));
-    for (const Step21Value& e : arg(r, 4).items)
-      if (auto it = keys.find(e.ref); e.kind == Kind::Ref && it != keys.end())
-        database.putProperty({it->second, "IFC", "Storey", name, ""});
-  }
-  // Property sets and quantities, by IfcRelDefinesByProperties.
-  for (uint64_t rel : f.idsOfType("IFCRELDEFINESBYPROPERTIES")) {
-    const Step21Instance* r = f.find(rel);
-    const Step21Instance* definition = f.deref(arg(r, 5));
-    if (!definition) continue;
-    const std::string set = textOf(arg(definition, 2));
-    std::vector<ProjectProperty> properties;
-    if (definition->type == "IFCPROPERTYSET") {
-      for (const Step21Value& pv : arg(definition, 4).items) {
-        const Step21Instance* p = f.deref(pv);
-        if (!p) continue;
-        if (p->type == "IFCPROPERTYSINGLEVALUE")
-          properties.push_back({"", set, textOf(arg(p, 0)), valueText(arg(p, 2)), unitText(f, arg(p, 3))});
-        else if (p->type == "IFCPROPERTYENUMERATEDVALUE")
-          properties.push_back({"", set, textOf(arg(p, 0)), valueText(arg(p, 2)), ""});
-      }
-    } else if (definition->type == "IFCELEMENTQUANTITY") {
-      for (const Step21Value& qv : arg(definition, 5).items) {
-        const Step21Instance* q = f.deref(qv);
-        if (!q || q->type.rfind("IFCQUANTITY", 0) != 0) continue;
-        properties.push_back({"", set, textOf(arg(q, 0)), valueText(arg(q, 3)), unitText(f, arg(q, 2))});
-      }
-    }
-    for (const Step21Value& o : arg(r, 4).items) {
-      auto it = keys.find(o.ref);
-      if (o.kind != Kind::Ref || it == keys.end()) continue;
-      for (ProjectProperty p : properties) {
-        p.db_key = it->second;
-        database.putProperty(p);
-      }
-    }
-  }
-  database.commit();
-  return ids.size();
 }
 
 }  // namespace tw

@@ -11,14 +11,16 @@
 //     circle is a torus segment (a bend); a revolved polyline is a revolution; CSG blocks,
 //     cylinders and spheres are boxes, cylinders and spheres; a swept disk along a polyline is a
 //     cylinder per segment;
+//   - an extrusion of a profile with voids, or along an oblique direction, is a closed mesh
+//     prism (profile_prism.h) within the product's mesh;
 //   - mapped items (IfcMappedItem) are expanded with their mapping;
 // - name: the product's Name (else its class); database key: its GlobalId; layer: the
 //   IfcPresentationLayerAssignment of its representation or items, else its IFC class;
 //   colour: the IfcStyledItem surface colour of its first styled item.
 // Not done: openings are not cut from their walls (IfcRelVoidsElement) and boolean clippings
-// keep their first operand (each counted in one warning), oblique extrusions, curved profile
-// edges (arcs of composite curves) and the voids of profiles are skipped or ignored with a
-// warning naming the #id, and property sets are not read.
+// keep their first operand (each counted in one warning); arcs of indexed polycurves and other
+// profile types are skipped with a warning naming the #id. Property sets go to the project
+// database (ifc_properties.h).
 //
 // Bad input: text that is not Part 21 is a FormatError naming the file and line; an item whose
 // geometry fails (a missing reference, a degenerate profile) is skipped with a warning naming
@@ -29,19 +31,16 @@
 #include <filesystem>
 
 #include "read_options.h"
+#include "step21_file.h"
 #include "scene_sink.h"
 
 namespace tw {
 
 void readIfc(const std::filesystem::path& path, SceneSink& sink, const ReadOptions& options = {});
 
-class ProjectDatabase;
-
-// What IFC knows of each drawn product, into the project database under its GlobalId: a record
-// (type: the IFC class, description: its Name) and properties: set "IFC" (Class, Name, Storey,
-// ObjectType), its property sets (IfcPropertySingleValue and enumerated values, with units) and
-// quantities (IfcElementQuantity). Returns the number of products written. Throws FormatError as
-// readIfc does.
-uint64_t writeIfcProperties(const std::filesystem::path& path, ProjectDatabase& database);
+// Whether `instance` is a product the importer draws: an IfcProduct (recognized by its
+// attributes' layout) with a representation, not an opening, space, annotation, grid, virtual
+// element or site. The property export (ifc_properties.h) keys the same products.
+bool isDrawnIfcProduct(const Step21File& file, const Step21Instance& instance);
 
 }  // namespace tw

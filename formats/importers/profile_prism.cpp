@@ -9,15 +9,6 @@
 namespace tw {
 namespace {
 
-double signedArea2(const std::vector<glm::dvec2>& loop) {
-  double a = 0.0;
-  for (size_t i = 0; i < loop.size(); ++i) {
-    const glm::dvec2 p = loop[i], q = loop[(i + 1) % loop.size()];
-    a += p.x * q.y - q.x * p.y;
-  }
-  return a;
-}
-
 double cross(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
   return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
 }
@@ -30,20 +21,29 @@ bool crosses(const glm::dvec2& p, const glm::dvec2& q, const glm::dvec2& r, cons
 
 }  // namespace
 
+double loopArea2(const std::vector<glm::dvec2>& loop) {
+  double a = 0.0;
+  for (size_t i = 0; i < loop.size(); ++i) {
+    const glm::dvec2 p = loop[i], q = loop[(i + 1) % loop.size()];
+    a += p.x * q.y - q.x * p.y;
+  }
+  return a;
+}
+
 std::vector<uint32_t> triangulateProfile(const std::vector<glm::dvec2>& outer,
                                          const std::vector<std::vector<glm::dvec2>>& holes) {
   // Every point, by its index in the concatenation; loops as index lists, wound as needed.
   std::vector<glm::dvec2> p(outer);
   std::vector<uint32_t> ring(outer.size());
   std::iota(ring.begin(), ring.end(), 0u);
-  if (signedArea2(outer) < 0.0) std::reverse(ring.begin(), ring.end());
+  if (loopArea2(outer) < 0.0) std::reverse(ring.begin(), ring.end());
   std::vector<std::vector<uint32_t>> hole_loops;
   for (const auto& hole : holes) {
     std::vector<uint32_t> loop(hole.size());
     std::iota(loop.begin(), loop.end(), uint32_t(p.size()));
     p.insert(p.end(), hole.begin(), hole.end());
     if (hole.size() < 3) continue;
-    if (signedArea2(hole) > 0.0) std::reverse(loop.begin(), loop.end());  // clockwise
+    if (loopArea2(hole) > 0.0) std::reverse(loop.begin(), loop.end());  // clockwise
     hole_loops.push_back(std::move(loop));
   }
   if (ring.size() < 3) return {};
@@ -110,8 +110,8 @@ std::vector<uint32_t> triangulateProfile(const std::vector<glm::dvec2>& outer,
     }
     if (!clipped) break;
   }
-  if (ring.size() == 3 && cross(p[ring[0]], p[ring[1]], p[ring[2]]) > 0.0)
-    triangles.insert(triangles.end(), {ring[0], ring[1], ring[2]});
+  for (size_t i = 1; i + 1 < ring.size(); ++i)  // the last ear, or a fan of what would not clip
+    triangles.insert(triangles.end(), {ring[0], ring[i], ring[i + 1]});
   return triangles;
 }
 
@@ -141,7 +141,7 @@ size_t appendProfilePrism(const std::vector<glm::dvec2>& outer,
     const auto [first, count] = loops[l];
     if (count < 3) continue;
     std::vector<glm::dvec2> loop(all.begin() + long(first), all.begin() + long(first + count));
-    const bool ccw = signedArea2(loop) > 0.0;
+    const bool ccw = loopArea2(loop) > 0.0;
     const bool want_ccw = l == 0;
     for (size_t i = 0; i < count; ++i) {
       uint32_t a = base + uint32_t(first + i), b = base + uint32_t(first + (i + 1) % count);

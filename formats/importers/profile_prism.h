@@ -23,8 +23,13 @@ size_t appendProfilePrism(const std::vector<glm::dvec2>& outer,
                           const std::vector<std::vector<glm::dvec2>>& holes,
                           const glm::dvec3& sweep, TriangleMesh& out);
 
-// The profile's triangles, for tests and caps: indices into the loops concatenated (outer first,
-// then each hole), counter-clockwise.
+// Twice the signed area of a closed loop (its last point joins its first): positive when it
+// winds counter-clockwise.
+double loopArea2(const std::vector<glm::dvec2>& loop);
+
+// The profile's triangles (also any one planar polygon's, projected): indices into the loops concatenated (outer first,
+// then each hole), counter-clockwise. A loop ear clipping cannot finish (degenerate, or crossing
+// itself) has its rest fanned, so no part of it is left open.
 std::vector<uint32_t> triangulateProfile(const std::vector<glm::dvec2>& outer,
                                          const std::vector<std::vector<glm::dvec2>>& holes);
 

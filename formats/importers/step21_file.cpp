@@ -311,6 +311,28 @@ Step21File Step21File::read(const std::filesystem::path& path) {
   return parse(buffer.str(), path.string());
 }
 
+namespace part21 {
+
+const Step21Value& arg(const Step21Instance* instance, size_t i) {
+  static const Step21Value null_value;
+  return instance && i < instance->args.size() ? instance->args[i] : null_value;
+}
+
+double numberOf(const Step21Value& v, double fallback) {
+  if (v.isNumber()) return v.number;
+  if (v.kind == Step21Value::Kind::Typed && !v.items.empty() && v.items[0].isNumber())
+    return v.items[0].number;
+  return fallback;
+}
+
+std::string textOf(const Step21Value& v) {
+  if (v.kind == Step21Value::Kind::String || v.kind == Step21Value::Kind::Enum) return v.text;
+  if (v.kind == Step21Value::Kind::Typed && !v.items.empty()) return textOf(v.items[0]);
+  return "";
+}
+
+}  // namespace part21
+
 const Step21Instance* Step21File::find(uint64_t id) const {
   auto it = instances_.find(id);
   return it == instances_.end() ? nullptr : &it->second;

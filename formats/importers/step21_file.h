@@ -37,6 +37,15 @@ struct Step21Instance {
   uint64_t line = 0;  // where it starts, 1-based
 };
 
+// Reading instance arguments without checking each one: an argument past the end is $, a
+// number or text wrapped in a typed value (IFCLENGTHMEASURE(2.5)) is unwrapped, anything else
+// gives the fallback or "".
+namespace part21 {
+const Step21Value& arg(const Step21Instance* instance, size_t i);
+double numberOf(const Step21Value& value, double fallback);
+std::string textOf(const Step21Value& value);  // strings and enumerations
+}  // namespace part21
+
 class Step21File {
  public:
   // Parses `path`. Throws FormatError naming the file and line for text that is not Part 21

@@ -203,16 +203,6 @@ Transform composed(const gp_Trsf& placement, const Transform& local) {
   return t;
 }
 
-Transform transformOf(const gp_Trsf& placement, const glm::dvec3& center) {
-  Transform t;
-  const gp_Pnt origin = gp_Pnt(center.x, center.y, center.z).Transformed(placement);
-  t.origin = glm::dvec3(origin.X(), origin.Y(), origin.Z());
-  for (int column = 0; column < 3; ++column)
-    for (int row = 0; row < 3; ++row)
-      t.linear[column][row] = float(placement.Value(row + 1, column + 1));
-  return t;
-}
-
 // Hands `mesh` to the sink in parts of at most max_triangles triangles, each part holding only
 // the vertices it uses.
 void emitInParts(SceneSink& sink, const ObjectInfo& info, const TriangleMesh& mesh,
@@ -368,7 +358,9 @@ class AssemblyWalker {
       sink_.onObject(SceneObject{info, part.primitive->primitive});
       return;
     }
-    info.transform = transformOf(placement * own, part.center);
+    Transform centred;  // the mesh's positions are relative to the part's box centre
+    centred.origin = part.center;
+    info.transform = composed(placement * own, centred);
     emitInParts(sink_, info, part.mesh, max_part_triangles_);
   }
 
