@@ -9,10 +9,12 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <string>
 
 #include <nlohmann/json.hpp>
 
+#include "obj_reader.h"
 #include "package_view.h"
 #include "package_writer.h"
 #include "project_database.h"
@@ -529,6 +531,74 @@ TEST(Cli, UpYTurnsAYUpObjUpright) {
   ASSERT_GT(lying_column.count, 100u);
   EXPECT_LT(lying_column.max_y - lying_column.min_y, lying_column.max_x - lying_column.min_x)
       << "read Z up, the column lies on its side";
+}
+
+// The Revit MEP model is Y up. Read with --up y, its orbit is upright in every frame: the
+// parts at the file's lowest Y (the ground-floor runs) are drawn below those at its highest Y
+// (the runs under the roof). Read Z up, the model lies on its side and the orbit turns it round
+// the wrong axis, so that order holds in some frames and not in others.
+TEST(Cli, UpYOrbitsTheYUpMepModelUpright) {
+  const auto file = test::sharedDataDir() / "duplex-mep.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  test::CollectingSink scene;
+  readObj(file, scene);
+  float lowest = INFINITY, highest = -INFINITY;
+  std::vector<std::pair<float, float>> span;  // per object: its file-Y range
+  for (const SceneObject& o : scene.objects) {
+    const auto& mesh = std::get<TriangleMesh>(o.geometry);
+    float lo = INFINITY, hi = -INFINITY;
+    for (const glm::vec3& p : mesh.positions) {
+      const float y = float(o.info.transform.origin.y) + p.y;  // OBJ objects are not rotated
+      lo = std::min(lo, y);
+      hi = std::max(hi, y);
+    }
+    if (span.size() <= o.info.id) span.resize(o.info.id + 1, {INFINITY, -INFINITY});
+    span[o.info.id] = {std::min(span[o.info.id].first, lo), std::max(span[o.info.id].second, hi)};
+    lowest = std::min(lowest, lo);
+    highest = std::max(highest, hi);
+  }
+  const float band = 0.2f * (highest - lowest);
+  std::vector<uint32_t> bottom, top;  // ids + 1, as the id images hold them
+  for (uint32_t id = 0; id < span.size(); ++id) {
+    if (span[id].second < lowest + band) bottom.push_back(id + 1);
+    if (span[id].first > highest - band) top.push_back(id + 1);
+  }
+  ASSERT_GT(bottom.size(), 20u);
+  ASSERT_GT(top.size(), 5u);
+
+  const auto dir = test::scratchDir();
+  constexpr int kFrames = 8;
+  // Per frame: whether every drawn bottom part lies lower in the image (larger rows) than the
+  // top parts, on average.
+  auto uprightFrames = [&](const std::string& name, const std::string& up) {
+    const auto twk = dir / (name + ".twk");
+    RunResult pre = run("preprocess -q " + file.string() + " -o " + twk.string() + up);
+    EXPECT_EQ(pre.exit_code, 0) << pre.output;
+    RunResult render = run("-q render " + twk.string() + " --orbit " + std::to_string(kFrames) +
+                           " --size 480x360 --png --out " + (dir / name).string());
+    EXPECT_EQ(render.exit_code, 0) << render.output;
+    int upright = 0;
+    for (int f = 0; f < kFrames; ++f) {
+      char ids[32];
+      std::snprintf(ids, sizeof ids, "ids_%05d.png", f);
+      auto meanRow = [&](const std::vector<uint32_t>& parts) {
+        double rows = 0.0;
+        uint64_t count = 0;
+        for (uint32_t id : parts) {
+          const IdPixels p = pixelsOf(dir / name / ids, id);
+          rows += p.mean_row * double(p.count);
+          count += p.count;
+        }
+        return count >= 20 ? std::optional<double>(rows / double(count)) : std::nullopt;
+      };
+      const auto bottom_row = meanRow(bottom), top_row = meanRow(top);
+      // Both seen, and the bottom parts 15 of 360 rows lower at least.
+      if (bottom_row && top_row && *bottom_row > *top_row + 15.0) ++upright;
+    }
+    return upright;
+  };
+  EXPECT_EQ(uprightFrames("upright", " --up y"), kFrames) << "every frame upright";
+  EXPECT_LT(uprightFrames("lying", ""), kFrames) << "read Z up, the model lies on its side";
 }
 
 TEST(Cli, RenderWritesFramesStatsAndReplaysItsPath) {
