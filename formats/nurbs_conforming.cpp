@@ -279,7 +279,11 @@ class Emitter {
     normals_.push_back(glm::vec3(0.0f));
     return index;
   }
-  void addNormal(uint32_t v, const glm::vec3& n) { normals_[v - base_] += n; }
+  // Vertices from before this emitter (placed by someone else) keep their normals.
+  void addNormal(uint32_t v, const glm::vec3& n) {
+    if (v >= base_) normals_[v - base_] += n;
+  }
+  const glm::vec3& position(uint32_t v) const { return out_.positions[v]; }
   void triangle(uint32_t a, uint32_t b, uint32_t c, bool flipped) {
     if (a == b || b == c || a == c) return;  // a collapsed border (pole) seen from its fan
     if (flipped) std::swap(b, c);
@@ -385,6 +389,62 @@ void zip(const Chain& border, const Chain& inner, Emitter& emit, bool flipped) {
       emit.triangle(bv[i], iv[j + 1], iv[j], flipped);
       ++j;
     }
+  }
+}
+
+// The inside of one patch: the interior grid of n x m cells (vertices i = 1 .. n-1,
+// j = 1 .. m-1), then one strip per side between the side's border string and the grid's outer
+// ring. `sign` orients the normals, `flip` the triangles.
+void meshInside(const PatchEval& e, uint32_t n, uint32_t m, const std::array<Chain, 4>& sides,
+                float sign, bool flip, Emitter& emit, ConformingTessellationStats& stats) {
+  std::vector<uint32_t> grid, inner;
+  std::vector<double> inner_t;
+  // Interior grid (i = 1 .. n-1, j = 1 .. m-1).
+  grid.resize(size_t{n - 1} * (m - 1));
+  auto g = [&](uint32_t a, uint32_t c) { return grid[size_t{c - 1} * (n - 1) + (a - 1)]; };
+  for (uint32_t c = 1; c < m; ++c)
+    for (uint32_t a = 1; a < n; ++a) {
+      glm::vec3 normal;
+      const glm::vec3 p = e.at(static_cast<double>(a) / n, static_cast<double>(c) / m, &normal);
+      const uint32_t v = emit.vertex(p);
+      emit.addNormal(v, sign * normal);
+      grid[size_t{c - 1} * (n - 1) + (a - 1)] = v;
+      ++stats.interior_vertices;
+    }
+  for (uint32_t c = 1; c + 1 < m; ++c)
+    for (uint32_t a = 1; a + 1 < n; ++a) {
+      const uint32_t v00 = g(a, c), v10 = g(a + 1, c), v11 = g(a + 1, c + 1), v01 = g(a, c + 1);
+      if (dist(emit.position(v00), emit.position(v11)) <= dist(emit.position(v10), emit.position(v01))) {
+        emit.triangle(v00, v10, v11, flip);
+        emit.triangle(v00, v11, v01, flip);
+      } else {
+        emit.triangle(v00, v10, v01, flip);
+        emit.triangle(v10, v11, v01, flip);
+      }
+    }
+  // One strip per side, between the border string and the grid's outer ring.
+  for (int s = 0; s < 4; ++s) {
+    inner.clear();
+    inner_t.clear();
+    auto push = [&](uint32_t a, uint32_t c, double t) {
+      inner.push_back(g(a, c));
+      inner_t.push_back(t);
+    };
+    switch (s) {
+      case 0:
+        for (uint32_t a = 1; a < n; ++a) push(a, 1, static_cast<double>(a) / n);
+        break;
+      case 1:
+        for (uint32_t c = 1; c < m; ++c) push(n - 1, c, static_cast<double>(c) / m);
+        break;
+      case 2:
+        for (uint32_t a = n - 1; a >= 1; --a) push(a, m - 1, 1.0 - static_cast<double>(a) / n);
+        break;
+      default:
+        for (uint32_t c = m - 1; c >= 1; --c) push(1, c, 1.0 - static_cast<double>(c) / m);
+        break;
+    }
+    zip(sides[s], Chain{&inner, &inner_t}, emit, flip);
   }
 }
 
@@ -536,8 +596,6 @@ void tessellateNurbsConforming(const NurbsPatchSet& set, float chordal_tolerance
   std::vector<BorderString> strings(border_count);
   std::vector<double> params;
   std::vector<glm::vec3> points;
-  std::vector<uint32_t> grid, inner;
-  std::vector<double> inner_t;
   uint64_t bisections = kMaxSetBisections;
   for (size_t i = 0; i < patch_count; ++i) {
     const PatchEval& e = evals[i];
@@ -624,57 +682,39 @@ void tessellateNurbsConforming(const NurbsPatchSet& set, float chordal_tolerance
       str.vertices.push_back(last);
       str.placed = true;
     }
-    // Interior grid (i = 1 .. n-1, j = 1 .. m-1).
-    grid.resize(size_t{n - 1} * (m - 1));
-    auto g = [&](uint32_t a, uint32_t c) { return grid[size_t{c - 1} * (n - 1) + (a - 1)]; };
-    for (uint32_t c = 1; c < m; ++c)
-      for (uint32_t a = 1; a < n; ++a) {
-        glm::vec3 normal;
-        const glm::vec3 p = e.at(static_cast<double>(a) / n, static_cast<double>(c) / m, &normal);
-        const uint32_t v = emit.vertex(p);
-        emit.addNormal(v, sign * normal);
-        grid[size_t{c - 1} * (n - 1) + (a - 1)] = v;
-        ++stats.interior_vertices;
-      }
-    for (uint32_t c = 1; c + 1 < m; ++c)
-      for (uint32_t a = 1; a + 1 < n; ++a) {
-        const uint32_t v00 = g(a, c), v10 = g(a + 1, c), v11 = g(a + 1, c + 1), v01 = g(a, c + 1);
-        if (dist(out.positions[v00], out.positions[v11]) <= dist(out.positions[v10], out.positions[v01])) {
-          emit.triangle(v00, v10, v11, flip);
-          emit.triangle(v00, v11, v01, flip);
-        } else {
-          emit.triangle(v00, v10, v01, flip);
-          emit.triangle(v10, v11, v01, flip);
-        }
-      }
-    // One strip per side, between the border string and the grid's outer ring.
-    for (int s = 0; s < 4; ++s) {
-      inner.clear();
-      inner_t.clear();
-      auto push = [&](uint32_t a, uint32_t c, double t) {
-        inner.push_back(g(a, c));
-        inner_t.push_back(t);
-      };
-      switch (s) {
-        case 0:
-          for (uint32_t a = 1; a < n; ++a) push(a, 1, static_cast<double>(a) / n);
-          break;
-        case 1:
-          for (uint32_t c = 1; c < m; ++c) push(n - 1, c, static_cast<double>(c) / m);
-          break;
-        case 2:
-          for (uint32_t a = n - 1; a >= 1; --a) push(a, m - 1, 1.0 - static_cast<double>(a) / n);
-          break;
-        default:
-          for (uint32_t c = m - 1; c >= 1; --c) push(1, c, 1.0 - static_cast<double>(c) / m);
-          break;
-      }
-      const BorderString& str = strings[4 * i + s];
-      zip(Chain{&str.vertices, &str.params}, Chain{&inner, &inner_t}, emit, flip);
-    }
+    std::array<Chain, 4> sides;
+    for (int s = 0; s < 4; ++s) sides[s] = Chain{&strings[4 * i + s].vertices, &strings[4 * i + s].params};
+    meshInside(e, n, m, sides, sign, flip, emit, stats);
   }
   emit.finish();
   if (stats_out) *stats_out = stats;
+}
+
+bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideString, 4>& sides,
+                           float chordal_tolerance, bool flip, TriangleMesh& out,
+                           ConformingTessellationStats* stats_out) {
+  if (!validateNurbsPatch(patch).empty()) return false;
+  for (const PatchSideString& side : sides) {
+    if (side.vertices.empty() || side.vertices.size() != side.t.size()) return false;
+    for (uint32_t v : side.vertices)
+      if (v >= out.positions.size()) return false;
+  }
+  for (int s = 0; s < 4; ++s)  // each side ends where the next begins
+    if (sides[s].vertices.back() != sides[(s + 1) % 4].vertices.front()) return false;
+  const PatchEval e{&patch, nurbsDomain(patch)};
+  const double tolerance =
+      std::isfinite(chordal_tolerance) && chordal_tolerance > 0.0f ? chordal_tolerance : INFINITY;
+  uint32_t n = 2, m = 2;
+  planGrid(sampleCurvature(e), tolerance, n, m);
+  ConformingTessellationStats stats;
+  stats.patches = 1;
+  Emitter emit(out, stats);
+  std::array<Chain, 4> chains;
+  for (int s = 0; s < 4; ++s) chains[s] = Chain{&sides[s].vertices, &sides[s].t};
+  meshInside(e, n, m, chains, flip ? -1.0f : 1.0f, flip, emit, stats);
+  emit.finish();
+  if (stats_out) *stats_out = stats;
+  return true;
 }
 
 uint64_t nurbsConformingTriangleCount(const NurbsPatchSet& patches, float chordal_tolerance) {

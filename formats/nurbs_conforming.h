@@ -12,7 +12,9 @@
 // Output vertices on shared borders and corners are bit-identical across patches (welded).
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <vector>
 
 #include "scene.h"
 
@@ -32,6 +34,25 @@ struct ConformingTessellationStats {
 // std::invalid_argument naming the patch index and the reason (validateNurbsPatch).
 void tessellateNurbsConforming(const NurbsPatchSet& patches, float chordal_tolerance,
                                TriangleMesh& out, ConformingTessellationStats* stats = nullptr);
+
+// One side of a patch whose border someone else placed: vertices already in the output mesh, in
+// the patch's counter-clockwise order (side 0 runs along v = v0 with u rising, then u = u1,
+// v = v1, u = u0), each with its parameter t in [0, 1] along the side (0 and 1 at the corners).
+// A collapsed side (a pole) is its one vertex.
+struct PatchSideString {
+  std::vector<uint32_t> vertices;
+  std::vector<double> t;
+};
+
+// The inside of one patch whose four border strings are given, as a B-rep importer has them
+// from the edge discretization its neighbouring faces share: the interior grid the chordal
+// tolerance asks for, joined to the strings by one strip per side, the same steps 3 and 5 as
+// above. Appends the interior vertices (positions; normals too when `out` carries them) and the
+// triangles to `out`; `flip` reverses the triangles. Returns false, adding nothing, when the patch
+// is invalid or the strings do not close (side s must end at the vertex side s + 1 starts with).
+bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideString, 4>& sides,
+                           float chordal_tolerance, bool flip, TriangleMesh& out,
+                           ConformingTessellationStats* stats = nullptr);
 
 // The number of triangles tessellateNurbsConforming makes of `patches`. Unlike the per-patch
 // count (nurbsTriangleCount), it tessellates the set to know: borders shared with a neighbour

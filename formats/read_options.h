@@ -31,6 +31,9 @@ struct ReadOptions {
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;
+  // Where a CAD importer tells what it made that the scene does not show ("B-spline faces 189:
+  // 84 tessellated conforming ..."). Empty: dropped.
+  std::function<void(const std::string&)> note;
 };
 
 // Reports `message` through options.warn, or on stderr.

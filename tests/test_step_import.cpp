@@ -8,6 +8,7 @@
 #include <set>
 
 #include "format_error.h"
+#include "patch_mesh_check.h"
 #include "scene_io.h"
 #include "step_importer.h"
 #include "test_support.h"
@@ -105,6 +106,29 @@ TEST(StepImport, ClosedSolidOfBSplineFacesIsWatertight) {
     for (int k = 0; k < 3; ++k)
       directed.insert({mesh.indices[t + k], mesh.indices[t + (k + 1) % 3]});
   EXPECT_EQ(directed.size(), 2 * edges.size());
+}
+
+// Its untrimmed B-spline faces are tessellated by the conforming tessellator on the B-rep's edge
+// nodes, and the shell stays closed: OpenMesh's check finds no boundary edge, T-vertex, refused
+// or inconsistently oriented face anywhere in it.
+TEST(StepImport, ConformingBSplineFacesKeepTheShellClosedWithoutTVertices) {
+  std::vector<std::string> notes;
+  ReadOptions options;
+  options.note = [&notes](const std::string& note) { notes.push_back(note); };
+  test::CollectingSink sink;
+  readStep(sample("Ventilator.stp"), sink, options);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_EQ(notes[0], "B-spline faces 189: 31 tessellated by the conforming tessellator on the "
+                      "B-rep's edges, 158 trimmed ones by BRepMesh");
+  ASSERT_EQ(sink.objects.size(), 1u);
+  const TriangleMesh& mesh = std::get<TriangleMesh>(sink.objects[0].geometry);
+  const PatchMeshReport report = checkPatchMesh(mesh, NurbsPatchSet{});
+  EXPECT_EQ(report.faces, mesh.triangleCount());
+  EXPECT_EQ(report.refused_faces, 0u);
+  EXPECT_EQ(report.boundary_edges, 0u);
+  EXPECT_EQ(report.t_vertices, 0u);
+  EXPECT_EQ(report.inconsistent_orientation, 0u);
+  EXPECT_TRUE(report.ok()) << report.first_problem;
 }
 
 TEST(StepImport, ReadSceneDispatchesByExtensionAndSplitsLargeParts) {

@@ -351,6 +351,8 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
     ReadOptions read;
     read.progress = progress.get();
     read.up = parseUpAxis(options->up);
+    std::vector<std::string> notes;
+    read.note = [&notes](const std::string& note) { notes.push_back(note); };
     const UpAxis up = fileUpAxis(options->file, read.up);
     auto start = std::chrono::steady_clock::now();
     readScene(options->file, stats, read);
@@ -362,6 +364,8 @@ void registerInfoCommand(CLI::App& app, const GlobalOptions& global) {
                 << "\n";
     else
       printText(options->file, bytes, stats, options->tolerance, up, seconds);
+    if (!options->json)
+      for (const std::string& note : notes) std::printf("import      %s\n", note.c_str());
     if (looksLikeTheOtherUp(stats)) {
       const glm::dvec3 e = stats.bounds.extent();
       std::fprintf(stderr,

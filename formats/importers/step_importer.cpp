@@ -5,6 +5,7 @@
 #include <BRepMesh_IncrementalMesh.hxx>
 #include <BRep_Tool.hxx>
 #include <Bnd_Box.hxx>
+#include <GeomAdaptor_Surface.hxx>
 #include <IFSelect_ReturnStatus.hxx>
 #include <Interface_Check.hxx>
 #include <Interface_CheckIterator.hxx>
@@ -52,6 +53,7 @@
 #include <vector>
 
 #include "format_error.h"
+#include "step_bspline_faces.h"
 #include "step_primitives.h"
 #include "tws_reader.h"
 #include "tws_writer.h"
@@ -129,6 +131,8 @@ struct PartMesh {
   glm::dvec3 center{0.0};
   TriangleMesh mesh;
   std::optional<RecognizedPrimitive> primitive;  // instead of the mesh, when the part is one
+  uint32_t bspline_faces = 0;     // B-spline and Bezier faces
+  uint32_t conforming_faces = 0;  // of those, tessellated by the conforming tessellator
 };
 
 // Positions are compared within this share of the part's size when recognizing primitives.
@@ -173,6 +177,15 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
       if (inserted)
         part.mesh.positions.push_back(glm::vec3(glm::dvec3(p.X(), p.Y(), p.Z()) - part.center));
       node_index[size_t(n)] = it->second;
+    }
+    const GeomAbs_SurfaceType kind = GeomAdaptor_Surface(BRep_Tool::Surface(face)).GetType();
+    if (kind == GeomAbs_BSplineSurface || kind == GeomAbs_BezierSurface) {
+      ++part.bspline_faces;
+      if (tessellateBSplineFace(face, *triangulation, placement, part.center, node_index,
+                                deflection, part.mesh)) {
+        ++part.conforming_faces;
+        continue;
+      }
     }
     const bool reversed = face.Orientation() == TopAbs_REVERSED;
     for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
@@ -258,6 +271,15 @@ class AssemblyWalker {
   }
 
   uint32_t objects() const { return next_id_; }
+
+  // Over the distinct products: B-spline and Bezier faces, and those tessellated conforming.
+  void faceCounts(uint64_t& bspline, uint64_t& conforming) const {
+    bspline = conforming = 0;
+    for (const auto& [shape, part] : meshes_) {
+      bspline += part.bspline_faces;
+      conforming += part.conforming_faces;
+    }
+  }
 
  private:
   std::string nodeName(const TDF_Label& instance, const TDF_Label& product) const {
@@ -451,6 +473,12 @@ void translate(const std::filesystem::path& path, const std::filesystem::path& s
     if (walker.objects() == 0)
       throw FormatError(file, "STEP model holds no faces to mesh" + quiet.said());
     writer.finish();
+    uint64_t bspline = 0, conforming = 0;
+    walker.faceCounts(bspline, conforming);
+    if (bspline > 0)
+      send('N', "B-spline faces " + std::to_string(bspline) + ": " + std::to_string(conforming) +
+                    " tessellated by the conforming tessellator on the B-rep's edges, " +
+                    std::to_string(bspline - conforming) + " trimmed ones by BRepMesh");
   } catch (const FormatError& e) {
     send('E', e.reason());
   } catch (const Standard_Failure& failure) {
@@ -486,6 +514,7 @@ class TemporaryScene {
 struct Translation {
   std::shared_ptr<const TemporaryScene> scene;
   std::vector<std::string> warnings;
+  std::vector<std::string> notes;
 };
 
 // Runs the translation in a child process. OpenCASCADE dereferences what a damaged file leaves
@@ -527,6 +556,7 @@ Translation translateInChild(const std::filesystem::path& path, const ReadOption
     at = end + 1;
     if (line.empty()) continue;
     if (line[0] == 'W') done.warnings.push_back(line.substr(1));
+    else if (line[0] == 'N') done.notes.push_back(line.substr(1));
     else if (line[0] == 'E' && error.empty()) error = line.substr(1);
   }
   if (WIFSIGNALED(status))
@@ -597,6 +627,8 @@ void readStep(const std::filesystem::path& path, SceneSink& sink, const ReadOpti
     TranslationCache::instance().add(key, *translation);
   }
   for (const std::string& warning : translation->warnings) readWarning(options, warning);
+  if (options.note)
+    for (const std::string& note : translation->notes) options.note(note);
   ReadOptions scene_options = options;
   scene_options.progress = nullptr;
   readTws(translation->scene->path(), sink, scene_options);
