@@ -548,7 +548,7 @@ Translation translateInChild(const std::filesystem::path& path, const ReadOption
   int status = 0;
   while (::waitpid(child, &status, 0) < 0 && errno == EINTR) {
   }
-  Translation done{scene, {}};
+  Translation done{scene, {}, {}};
   std::string error;
   for (size_t at = 0; at < report.size();) {
     const size_t end = std::min(report.find('\n', at), report.size());
