@@ -121,10 +121,11 @@ bool tessellateBSplineFace(const TopoDS_Face& face, const Poly_Triangulation& tr
     on_border[size_t(n)] = border;
   }
   // Every node on the face's edges must be one of them, or the wire cuts across the rectangle.
+  TopLoc_Location location;
+  const Handle(Poly_Triangulation) handle = BRep_Tool::Triangulation(face, location);
   for (TopExp_Explorer e(face, TopAbs_EDGE); e.More(); e.Next()) {
-    TopLoc_Location location;
-    const Handle(Poly_PolygonOnTriangulation) polygon = BRep_Tool::PolygonOnTriangulation(
-        TopoDS::Edge(e.Current()), BRep_Tool::Triangulation(face, location), location);
+    const Handle(Poly_PolygonOnTriangulation) polygon =
+        BRep_Tool::PolygonOnTriangulation(TopoDS::Edge(e.Current()), handle, location);
     if (polygon.IsNull()) return false;
     for (int i = 1; i <= polygon->NbNodes(); ++i) {
       const int n = polygon->Node(i);
