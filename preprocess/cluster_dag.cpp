@@ -8,6 +8,8 @@
 #include <stdexcept>
 
 #include <meshoptimizer.h>
+#include <optional>
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -748,6 +750,18 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
     std::vector<GroupOutcome> outcomes;
     uint64_t new_triangles = 0;
     bool shrunk = false;
+    // The level's vertices, each once, and the near-vertex index over them (built on demand).
+    std::vector<uint32_t> level_vertices;
+    if (options.position_step_m > 0.0) {
+      for (const WorkCluster& wc : current_work)
+        for (uint32_t v : wc.tris)
+          if (slot[v] == kUnowned) {
+            slot[v] = 0;
+            level_vertices.push_back(v);
+          }
+      for (uint32_t v : level_vertices) slot[v] = kUnowned;
+    }
+    std::optional<NearVertexIndex> near_index;
     std::vector<std::span<const uint32_t>> cluster_tris, cluster_ids;
     cluster_tris.reserve(current_work.size());
     cluster_ids.reserve(current_work.size());
@@ -818,14 +832,11 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
           largest = glm::max(largest, hi - lo);
         }
         const float tolerance = packageGridTolerance(largest, options.position_step_m);
-        std::vector<uint32_t> level_vertices;
-        for (const WorkCluster& wc : current_work)
-          level_vertices.insert(level_vertices.end(), wc.tris.begin(), wc.tris.end());
-        std::sort(level_vertices.begin(), level_vertices.end());
-        level_vertices.erase(std::unique(level_vertices.begin(), level_vertices.end()),
-                             level_vertices.end());
-        markVerticesNearOtherGroups(level_positions, level_vertices, vertex_owner, kMulti,
-                                    tolerance, near_other_group);
+        // Attempts of one level mostly share the tolerance (the grid shift is a power of two):
+        // the index is rebuilt only when it changes.
+        if (!near_index || near_index->tolerance() != tolerance)
+          near_index.emplace(level_positions, level_vertices, tolerance);
+        near_index->markNearOtherGroups(level_positions, vertex_owner, kMulti, near_other_group);
       }
       LevelContext ctx{level_positions, vertex_owner,     shared_edges, open_vertex,
                        near_other_group, open_edges,      options,      !options.allow_proxy};
