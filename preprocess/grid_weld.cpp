@@ -7,11 +7,14 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <unordered_map>
 
 #include <glm/common.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "package_format.h"
+#include "vertex_cell_grid.h"
 
 namespace tw {
 
@@ -69,77 +72,35 @@ GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
   }
 
   // 1. Vertices closer than one base step (float noise: a pipe's end and its elbow's, a ulp
-  // apart, which a pointwise snap can still round apart) join the first earlier vertex within
-  // that distance per axis; seam vertices never move, so they never join. Joining the first
-  // representative, not a chain, bounds every move by one step.
+  // apart, which a pointwise snap can still round apart) join the earliest vertex within that
+  // distance per axis that has not joined another; seam vertices never move, so they never join.
+  // Joining a representative, not a chain, bounds every move by one step.
   const double tolerance = position_step_m;
   std::vector<uint32_t> representative(positions.size());
   for (size_t v = 0; v < positions.size(); ++v) representative[v] = uint32_t(v);
-  // The candidates sorted by tolerance cell (then index), and each cell's range found through a
-  // flat open-addressing table: the 27 neighbouring cells of a vertex are probed without a map
-  // of vectors (one allocation per cell). Within a cell the earlier vertices come first, so the
-  // first representative found is the one the index-order scan would find.
-  struct Cell {
-    int64_t x, y, z;
-    auto operator<=>(const Cell&) const = default;
-  };
-  std::vector<Cell> cell_of(positions.size());
-  std::vector<uint32_t> order;
-  order.reserve(positions.size());
-  for (size_t v = 0; v < positions.size(); ++v) {
-    const glm::vec3& p = positions[v];
-    if (vertex_shift[v] == kNoShift || !std::isfinite(p.x + p.y + p.z)) continue;
-    cell_of[v] = {int64_t(std::floor(double(p.x) / tolerance)),
-                  int64_t(std::floor(double(p.y) / tolerance)),
-                  int64_t(std::floor(double(p.z) / tolerance))};
-    order.push_back(uint32_t(v));
-  }
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    return cell_of[a] < cell_of[b] || (cell_of[a] == cell_of[b] && a < b);
-  });
-  auto hashCell = [](const Cell& c) {
-    return uint64_t(c.x) * 0x9E3779B97F4A7C15ull ^ uint64_t(c.y) * 0xC2B2AE3D27D4EB4Full ^
-           uint64_t(c.z) * 0x165667B19E3779F9ull;
-  };
-  size_t table_size = 16;
-  while (table_size < 2 * order.size()) table_size *= 2;
-  constexpr uint32_t kEmptySlot = std::numeric_limits<uint32_t>::max();
-  std::vector<uint32_t> first_in_cell(table_size, kEmptySlot);  // index into order
-  auto slotOf = [&](const Cell& c) {
-    size_t i = size_t(hashCell(c)) & (table_size - 1);
-    while (first_in_cell[i] != kEmptySlot && cell_of[order[first_in_cell[i]]] != c)
-      i = (i + 1) & (table_size - 1);
-    return i;
-  };
-  for (size_t i = 0; i < order.size(); ++i)
-    if (i == 0 || cell_of[order[i]] != cell_of[order[i - 1]]) first_in_cell[slotOf(cell_of[order[i]])] = uint32_t(i);
-
-  // In index order, as the tolerance demands: a vertex joins the first earlier representative
-  // within the tolerance, scanning the neighbouring cells z, y, x.
-  std::vector<uint32_t> by_index = order;
-  std::sort(by_index.begin(), by_index.end());
-  for (uint32_t v : by_index) {
-    const bool movable = keep.empty() || keep[v] == 0;
-    if (!movable) continue;
-    const Cell& c = cell_of[v];
-    const glm::dvec3 p(positions[v]);
-    for (int64_t z = c.z - 1; z <= c.z + 1 && representative[v] == v; ++z)
-      for (int64_t y = c.y - 1; y <= c.y + 1 && representative[v] == v; ++y)
-        for (int64_t x = c.x - 1; x <= c.x + 1 && representative[v] == v; ++x) {
-          const Cell n{x, y, z};
-          const uint32_t first = first_in_cell[slotOf(n)];
-          if (first == kEmptySlot) continue;
-          for (size_t i = first; i < order.size() && cell_of[order[i]] == n; ++i) {
-            const uint32_t r = order[i];
-            if (r >= v) break;
-            if (representative[r] != r) continue;
-            const glm::dvec3 d = glm::abs(glm::dvec3(positions[r]) - p);
-            if (std::max({d.x, d.y, d.z}) <= tolerance) {
-              representative[v] = r;
-              break;
-            }
-          }
-        }
+  std::vector<uint32_t> used;
+  used.reserve(positions.size());
+  for (size_t v = 0; v < positions.size(); ++v)
+    if (vertex_shift[v] != kNoShift) used.push_back(uint32_t(v));
+  // Which movable vertices have any earlier vertex within reach, in parallel (nearly all have
+  // none); then, in index order, each of those joins the earliest one still a representative.
+  const VertexCellGrid grid(positions, used, tolerance);
+  std::vector<uint8_t> has_earlier(positions.size(), 0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, used.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t i = range.begin(); i != range.end(); ++i) {
+                        const uint32_t v = used[i];
+                        if (!keep.empty() && keep[v] != 0) continue;
+                        has_earlier[v] = grid.smallestWithin(positions[v], v, [](uint32_t) {
+                          return true;
+                        }) != VertexCellGrid::kNone;
+                      }
+                    });
+  for (uint32_t v : used) {
+    if (!has_earlier[v]) continue;
+    const uint32_t r = grid.smallestWithin(positions[v], v,
+                                           [&](uint32_t w) { return representative[w] == w; });
+    if (r != VertexCellGrid::kNone) representative[v] = r;
   }
   for (size_t v = 0; v < positions.size(); ++v) {
     const uint32_t r = representative[v];
@@ -149,38 +110,57 @@ GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
 
   // 2. Each representative snapped to the coarsest grid among the clusters of its vertices, then
   // equal positions welded.
+  std::vector<uint32_t> representatives;
+  for (size_t v = 0; v < positions.size(); ++v)
+    if (representative[v] == v) representatives.push_back(uint32_t(v));
+  std::vector<glm::vec3> snapped(positions.begin(), positions.end());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, representatives.size(), 4096),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      for (size_t i = range.begin(); i != range.end(); ++i) {
+                        const uint32_t v = representatives[i];
+                        if (vertex_shift[v] == kNoShift || (!keep.empty() && keep[v] != 0))
+                          continue;
+                        const double cell = std::ldexp(position_step_m, int(vertex_shift[v]));
+                        glm::vec3& p = snapped[v];
+                        for (int a = 0; a < 3; ++a) {
+                          if (!std::isfinite(p[a])) continue;
+                          p[a] = float(std::nearbyint(double(p[a]) / cell) * cell);
+                          if (p[a] == 0.0f) p[a] = 0.0f;  // -0 and +0 are one position
+                        }
+                      }
+                    });
+  // Equal bits welded, numbered in order of first use: sorted by bits then vertex, each run's
+  // first vertex stands for the run.
+  struct Keyed {
+    uint32_t x, y, z, vertex;
+    bool operator<(const Keyed& o) const {
+      return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : vertex < o.vertex;
+    }
+  };
+  std::vector<Keyed> keyed(representatives.size());
+  for (size_t i = 0; i < representatives.size(); ++i) {
+    const glm::vec3& p = snapped[representatives[i]];
+    keyed[i] = {std::bit_cast<uint32_t>(p.x), std::bit_cast<uint32_t>(p.y),
+                std::bit_cast<uint32_t>(p.z), representatives[i]};
+  }
+  tbb::parallel_sort(keyed.begin(), keyed.end());
+  std::vector<uint32_t> run_head(positions.size(), kNoShift);
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    const bool same = i > 0 && keyed[i].x == keyed[i - 1].x && keyed[i].y == keyed[i - 1].y &&
+                      keyed[i].z == keyed[i - 1].z;
+    run_head[keyed[i].vertex] = same ? run_head[keyed[i - 1].vertex] : keyed[i].vertex;
+  }
   GridWeld weld;
   weld.remap.resize(positions.size());
-  weld.positions.reserve(positions.size());
-  struct Bits {
-    uint32_t x, y, z;
-    bool operator==(const Bits&) const = default;
-  };
-  struct BitsHash {
-    size_t operator()(const Bits& b) const {
-      return size_t((uint64_t(b.x) * 0x9E3779B97F4A7C15ull) ^
-                    (uint64_t(b.y) * 0xC2B2AE3D27D4EB4Full) ^ (uint64_t(b.z) * 0x165667B19E3779F9ull));
+  weld.positions.reserve(representatives.size());
+  for (uint32_t v : representatives) {
+    const uint32_t head = run_head[v];
+    if (head == v) {
+      weld.remap[v] = uint32_t(weld.positions.size());
+      weld.positions.push_back(snapped[v]);
+    } else {
+      weld.remap[v] = weld.remap[head];  // the head is earlier: already numbered
     }
-  };
-  std::unordered_map<Bits, uint32_t, BitsHash> first;
-  first.reserve(positions.size());
-  for (size_t v = 0; v < positions.size(); ++v) {
-    if (representative[v] != v) continue;
-    glm::vec3 p = positions[v];
-    const bool snap = vertex_shift[v] != kNoShift && (keep.empty() || keep[v] == 0);
-    if (snap) {
-      const double cell = std::ldexp(position_step_m, int(vertex_shift[v]));
-      for (int a = 0; a < 3; ++a) {
-        if (!std::isfinite(p[a])) continue;
-        p[a] = float(std::nearbyint(double(p[a]) / cell) * cell);
-        if (p[a] == 0.0f) p[a] = 0.0f;  // -0 and +0 are one position
-      }
-    }
-    const Bits key{std::bit_cast<uint32_t>(p.x), std::bit_cast<uint32_t>(p.y),
-                   std::bit_cast<uint32_t>(p.z)};
-    auto [it, fresh] = first.try_emplace(key, uint32_t(weld.positions.size()));
-    if (fresh) weld.positions.push_back(p);
-    weld.remap[v] = it->second;
   }
   for (size_t v = 0; v < positions.size(); ++v) {
     weld.remap[v] = weld.remap[representative[v]];

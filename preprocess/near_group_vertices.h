@@ -19,18 +19,20 @@
 
 #include <glm/glm.hpp>
 
+#include "vertex_cell_grid.h"
+
 namespace tw {
 
 // How far apart two vertices may be and still decode as one: twice the package's quantization
 // error at the grid a cluster of this extent is stored on (grid_weld.h, clusterPositionShift).
 float packageGridTolerance(const glm::vec3& extent, double position_step_m);
 
-// A hashed grid of tolerance-sized cells over a set of vertices.
+// The vertex pairs within a tolerance over a set of vertices, kept for the attempts of a level.
 class NearVertexIndex {
  public:
   NearVertexIndex() = default;
   // `vertices`: indices into positions, each once. Non-finite positions are left out.
-  // tolerance <= 0 gives an index that marks nothing.
+  // tolerance <= 0 gives an index that marks nothing. Positions must outlive the index.
   NearVertexIndex(std::span<const glm::vec3> positions, std::span<const uint32_t> vertices,
                   float tolerance);
 
@@ -38,32 +40,16 @@ class NearVertexIndex {
 
   // For each indexed vertex whose group (owner[v]) is a single group, sets near[v] = 1 when a
   // vertex of another group, or a shared one (owner `multi`), lies within the tolerance on every
-  // axis. Shared vertices are not marked themselves (they are held anyway). Runs on TBB.
+  // axis. Shared vertices are not marked themselves (they are held anyway).
   void markNearOtherGroups(std::span<const glm::vec3> positions, std::span<const uint32_t> owner,
                            uint32_t multi, std::vector<uint8_t>& near) const;
 
  private:
-  struct Entry {
-    int64_t x, y, z;
-    uint32_t vertex;
-    int8_t side[3];  // per axis, the neighbouring cell a vertex within tolerance may lie in
-    bool operator<(const Entry& o) const {
-      return x != o.x ? x < o.x : y != o.y ? y < o.y : z != o.z ? z < o.z : vertex < o.vertex;
-    }
-  };
-  size_t slotOf(int64_t x, int64_t y, int64_t z) const;
-  // Calls visit(w) for each other indexed vertex w within the tolerance of entry e's vertex,
-  // until visit returns false.
-  template <typename Visit>
-  void forEachNear(const Entry& e, std::span<const glm::vec3> positions, Visit&& visit) const;
-  void listPairs(std::span<const glm::vec3> positions);
-
   float tolerance_ = 0.0f;
-  std::vector<Entry> entries_;   // sorted by cell, so a cell's vertices are one run
-  std::vector<uint32_t> first_;  // open addressing: a cell's first entry, or kEmpty
+  VertexCellGrid grid_;
   // Every (vertex, vertex within the tolerance) pair, both ways round. Few on real models (the
   // tolerance is below the quantization step); when they would be many (thousands of vertices
-  // on one spot) the list is left empty and each marking searches the cells again.
+  // on one spot) the list is left empty and each marking searches the grid again.
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   bool search_each_time_ = false;
 };
