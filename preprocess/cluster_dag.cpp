@@ -575,6 +575,159 @@ std::vector<uint8_t> lockedSeamVertices(const std::vector<glm::vec3>& positions,
   return keep;
 }
 
+// Groups the clusters listed in `regroup` (ascending) and puts those groups after the groups of
+// the previous attempt that hold none of them, which keep their outcomes; fresh[g] = 1 for the
+// new groups. When `regroup` lists every cluster, the level is grouped anew. Large objects are
+// grouped apart, except when the groups would be as large as the clusters to group: then they
+// are one group (the level's last resort).
+void regroupClusters(std::span<const std::span<const uint32_t>> cluster_tris,
+                     std::span<const std::span<const uint32_t>> cluster_ids,
+                     std::span<const glm::vec3> centers, const std::vector<uint32_t>& regroup,
+                     uint64_t group_size, uint32_t cluster_size, size_t vertex_count,
+                     std::vector<std::vector<uint32_t>>& groups,
+                     std::vector<GroupOutcome>& outcomes, std::vector<uint8_t>& fresh) {
+  std::vector<std::span<const uint32_t>> sub_tris, sub_ids;
+  std::vector<glm::vec3> sub_centers;
+  for (uint32_t c : regroup) {
+    sub_tris.push_back(cluster_tris[c]);
+    sub_ids.push_back(cluster_ids[c]);
+    sub_centers.push_back(centers[c]);
+  }
+  const uint32_t size = uint32_t(std::min<uint64_t>(group_size, regroup.size()));
+  std::vector<std::vector<uint32_t>> made =
+      size < regroup.size()
+          ? groupClustersByObject(sub_tris, sub_ids, sub_centers, size, cluster_size, vertex_count)
+          : groupClusters(sub_tris, sub_centers, size, vertex_count);
+  for (std::vector<uint32_t>& group : made)
+    for (uint32_t& m : group) m = regroup[m];
+
+  std::vector<std::vector<uint32_t>> next_groups;
+  std::vector<GroupOutcome> next_outcomes;
+  if (regroup.size() < cluster_tris.size()) {
+    std::vector<uint8_t> regrouped(cluster_tris.size(), 0);
+    for (uint32_t c : regroup) regrouped[c] = 1;
+    for (size_t g = 0; g < groups.size(); ++g)
+      if (!regrouped[groups[g].front()]) {
+        next_groups.push_back(std::move(groups[g]));
+        next_outcomes.push_back(std::move(outcomes[g]));
+      }
+  }
+  fresh.assign(next_groups.size(), 0);
+  for (std::vector<uint32_t>& group : made) {
+    next_groups.push_back(std::move(group));
+    next_outcomes.emplace_back();
+    fresh.push_back(1);
+  }
+  groups = std::move(next_groups);
+  outcomes = std::move(next_outcomes);
+}
+
+// Whether each group did not shrink to min_shrink_ratio of its input.
+std::vector<uint8_t> failedGroups(const std::vector<WorkCluster>& work,
+                                  const std::vector<std::vector<uint32_t>>& groups,
+                                  const std::vector<GroupOutcome>& outcomes,
+                                  float min_shrink_ratio) {
+  std::vector<uint8_t> failed(groups.size(), 0);
+  for (size_t g = 0; g < groups.size(); ++g) {
+    uint64_t input = 0;
+    for (uint32_t m : groups[g]) input += work[m].ids.size();
+    failed[g] = double(outcomes[g].triangles) > min_shrink_ratio * double(input);
+  }
+  return failed;
+}
+
+// A retried level's first resort: each group that did not shrink is merged with the groups it
+// shares a vertex with (their common border is locked, which is what keeps a group from
+// shrinking). A group merged with nothing keeps its outcome: its shared vertices
+// stay shared whatever the others become, so its borders, and so its result, are the same.
+// fresh[g] = 1 for the merged groups. Returns false, changing nothing, when no failed group
+// shares a vertex with another.
+bool mergeFailedGroupsWithNeighbours(const std::vector<WorkCluster>& work,
+                                     const std::vector<uint8_t>& failed,
+                                     const std::vector<uint32_t>& vertex_owner,
+                                     std::vector<std::vector<uint32_t>>& groups,
+                                     std::vector<GroupOutcome>& outcomes,
+                                     std::vector<uint8_t>& fresh) {
+  std::vector<std::pair<uint32_t, uint32_t>> vertex_group;  // shared vertex, a group using it
+  for (uint32_t g = 0; g < groups.size(); ++g)
+    for (uint32_t m : groups[g])
+      for (uint32_t v : work[m].tris)
+        if (vertex_owner[v] == kMulti) vertex_group.emplace_back(v, g);
+  std::sort(vertex_group.begin(), vertex_group.end());
+  vertex_group.erase(std::unique(vertex_group.begin(), vertex_group.end()), vertex_group.end());
+  // Each failed group, in order, takes its neighbours that no earlier one took. Not transitive:
+  // on a connected model the failed groups' neighbourhoods chain into one group of most of the
+  // level; a failed group that still does not shrink merges again in the next attempt.
+  std::vector<std::vector<uint32_t>> neighbours(groups.size());
+  for (size_t i = 0; i < vertex_group.size();) {
+    size_t j = i;
+    while (j < vertex_group.size() && vertex_group[j].first == vertex_group[i].first) ++j;
+    for (size_t a = i; a < j; ++a)
+      if (failed[vertex_group[a].second])
+        for (size_t b = i; b < j; ++b)
+          if (b != a) neighbours[vertex_group[a].second].push_back(vertex_group[b].second);
+    i = j;
+  }
+  constexpr uint32_t kAlone = kUnowned;
+  std::vector<uint32_t> taken_by(groups.size(), kAlone);
+  bool merged = false;
+  for (uint32_t g = 0; g < groups.size(); ++g) {
+    if (!failed[g] || taken_by[g] != kAlone) continue;
+    std::sort(neighbours[g].begin(), neighbours[g].end());
+    neighbours[g].erase(std::unique(neighbours[g].begin(), neighbours[g].end()),
+                        neighbours[g].end());
+    for (uint32_t n : neighbours[g])
+      if (taken_by[n] == kAlone) {
+        taken_by[n] = g;
+        taken_by[g] = g;
+        merged = true;
+      }
+  }
+  if (!merged) return false;
+  // The merged groups in place of their first member; the others kept with their outcomes.
+  std::vector<uint32_t> slot(groups.size(), kUnowned);
+  std::vector<std::vector<uint32_t>> next_groups;
+  std::vector<GroupOutcome> next_outcomes;
+  std::vector<uint8_t> next_fresh;
+  for (uint32_t g = 0; g < groups.size(); ++g) {
+    const uint32_t head = taken_by[g] == kAlone ? g : taken_by[g];
+    if (slot[head] == kUnowned) {
+      slot[head] = uint32_t(next_groups.size());
+      next_groups.emplace_back();
+      const bool kept = taken_by[g] == kAlone;
+      next_outcomes.push_back(kept ? std::move(outcomes[g]) : GroupOutcome{});
+      next_fresh.push_back(kept ? 0 : 1);
+    }
+    std::vector<uint32_t>& members = next_groups[slot[head]];
+    members.insert(members.end(), groups[g].begin(), groups[g].end());
+  }
+  for (std::vector<uint32_t>& members : next_groups) std::sort(members.begin(), members.end());
+  groups = std::move(next_groups);
+  outcomes = std::move(next_outcomes);
+  fresh = std::move(next_fresh);
+  return true;
+}
+
+// A retried level's second resort, when no failed group touches another: the failed groups'
+// clusters, grouped again with larger groups (disconnected small parts merge with their
+// neighbours in space). When they are the clusters of the last attempt, already one group, the
+// whole level is grouped again.
+std::vector<uint32_t> clustersOfFailedGroups(const std::vector<std::vector<uint32_t>>& groups,
+                                             const std::vector<uint8_t>& failed,
+                                             size_t cluster_count,
+                                             const std::vector<uint32_t>& last_regroup,
+                                             uint64_t last_group_size) {
+  std::vector<uint32_t> regroup;
+  for (size_t g = 0; g < groups.size(); ++g)
+    if (failed[g]) regroup.insert(regroup.end(), groups[g].begin(), groups[g].end());
+  std::sort(regroup.begin(), regroup.end());
+  if (regroup == last_regroup && last_group_size >= last_regroup.size()) {
+    regroup.resize(cluster_count);
+    std::iota(regroup.begin(), regroup.end(), 0u);
+  }
+  return regroup;
+}
+
 }  // namespace
 
 ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
@@ -769,14 +922,18 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       cluster_tris.push_back(wc.tris);
       cluster_ids.push_back(wc.ids);
     }
+    // A level that does not shrink enough is retried: groups that did not shrink merge with
+    // their neighbours (mergeFailedGroupsWithNeighbours), or, where they touch none, are grouped
+    // again four times larger (clustersOfFailedGroups); the other groups keep their results.
+    std::vector<uint32_t> regroup(current_work.size());
+    std::iota(regroup.begin(), regroup.end(), 0u);
+    std::vector<uint8_t> fresh;  // per group: its outcome is to be computed in this attempt
+    float attempt_tolerance = -1.0f;
+    bool regroup_pending = true;
     for (uint64_t group_size = options.group_size;; group_size *= 4) {
-      // Large objects are grouped apart, except in a last attempt with the whole level as one
-      // group (which ends the retries).
-      const uint32_t size = uint32_t(std::min<uint64_t>(group_size, current_work.size()));
-      groups = size < current_work.size()
-                   ? groupClustersByObject(cluster_tris, cluster_ids, centers, size,
-                                           options.cluster_size, level_positions.size())
-                   : groupClusters(cluster_tris, centers, size, level_positions.size());
+      if (regroup_pending)
+        regroupClusters(cluster_tris, cluster_ids, centers, regroup, group_size,
+                        options.cluster_size, level_positions.size(), groups, outcomes, fresh);
       // Which vertices and edges are shared between groups: those are the locked borders.
       // Only the level's own vertices are ever read: reset those, not the whole model's.
       for (const WorkCluster& wc : current_work)
@@ -832,6 +989,9 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
           largest = glm::max(largest, hi - lo);
         }
         const float tolerance = packageGridTolerance(largest, options.position_step_m);
+        // Kept results hold only while the near-vertex tolerance does.
+        if (tolerance != attempt_tolerance) fresh.assign(groups.size(), 1);
+        attempt_tolerance = tolerance;
         // Attempts of one level mostly share the tolerance (the grid shift is a power of two):
         // the index is rebuilt only when it changes.
         if (!near_index || near_index->tolerance() != tolerance)
@@ -840,11 +1000,17 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       }
       LevelContext ctx{level_positions, vertex_owner,     shared_edges, open_vertex,
                        near_other_group, open_edges,      options,      !options.allow_proxy};
-      outcomes.assign(groups.size(), GroupOutcome{});
-      tbb::parallel_for(tbb::blocked_range<size_t>(0, groups.size(), 1),
+      // Proxies are built in a second pass over the whole level: with them, nothing is kept.
+      if (options.allow_proxy) fresh.assign(groups.size(), 1);
+      std::vector<uint32_t> to_build;
+      for (uint32_t g = 0; g < groups.size(); ++g)
+        if (fresh[g]) to_build.push_back(g);
+      dag.stats.groups_kept_on_retry += uint32_t(groups.size() - to_build.size());
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, to_build.size(), 1),
                         [&](const tbb::blocked_range<size_t>& range) {
-                          for (size_t g = range.begin(); g != range.end(); ++g)
-                            outcomes[g] = processGroup(ctx, current_work, groups[g]);
+                          for (size_t i = range.begin(); i != range.end(); ++i)
+                            outcomes[to_build[i]] =
+                                processGroup(ctx, current_work, groups[to_build[i]]);
                         });
       if (options.allow_proxy) {
         std::vector<uint32_t> wanting;
@@ -877,6 +1043,13 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
       }
       if (groups.size() == 1) break;  // one group: no locked borders left to blame
       ++dag.stats.level_retries;
+      const std::vector<uint8_t> failed =
+          failedGroups(current_work, groups, outcomes, options.min_shrink_ratio);
+      regroup_pending =
+          !mergeFailedGroupsWithNeighbours(current_work, failed, vertex_owner, groups, outcomes,
+                                           fresh);
+      if (regroup_pending)
+        regroup = clustersOfFailedGroups(groups, failed, current_work.size(), regroup, group_size);
     }
     if (!shrunk) {
       // A small level that cannot shrink is the root; a big one takes whatever progress it got.

@@ -208,7 +208,8 @@ struct DagBuildStats {
   uint32_t merged_results_rejected = 0;  // vertex clustering output failed the border check
   uint32_t proxy_results_rejected = 0;   // proxy output failed the boundary check
   uint32_t proxies_skipped = 0;  // not built: dropping reached the target with far less error
-  uint32_t level_retries = 0;            // levels redone with larger groups
+  uint32_t level_retries = 0;            // level attempts redone with merged or larger groups
+  uint32_t groups_kept_on_retry = 0;     // group results a retried attempt reused as they were
   uint32_t levels_below_shrink = 0;      // levels accepted although ratio > min_shrink_ratio
   bool root_within_limit = true;         // root level holds <= max_root_triangles
 };

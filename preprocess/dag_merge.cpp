@@ -24,6 +24,7 @@ void addStats(DagBuildStats& to, const DagBuildStats& from) {
   to.locked_results_rejected += from.locked_results_rejected;
   to.sloppy_results_rejected += from.sloppy_results_rejected;
   to.level_retries += from.level_retries;
+  to.groups_kept_on_retry += from.groups_kept_on_retry;
   to.levels_below_shrink += from.levels_below_shrink;
 }
 
