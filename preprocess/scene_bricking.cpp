@@ -13,6 +13,8 @@
 #include <unordered_map>
 
 #define XXH_INLINE_ALL
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <xxhash.h>
 
 #include "byte_packing.h"
@@ -348,11 +350,9 @@ class BrickingSink : public SceneSink {
     const uint32_t dense = objectIndex(object.info);
     const Transform& t = object.info.transform;
     if (const auto* mesh = std::get_if<TriangleMesh>(&object.geometry)) {
-      addMesh(*mesh, t, dense);
+      queueMesh(PendingMesh{*mesh, {}, t, dense});
     } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&object.geometry)) {
-      TriangleMesh tessellated;
-      tessellateNurbsConforming(*nurbs, options_.nurbs_tolerance, tessellated);
-      addMesh(tessellated, t, dense);
+      queueMesh(PendingMesh{{}, *nurbs, t, dense});
     } else {
       ByteWriter w;
       w.put(dense);
@@ -373,8 +373,12 @@ class BrickingSink : public SceneSink {
     }
   }
 
+  // The end of one input: its queued meshes are binned (their errors name this input).
+  void endInput() { binPending(); }
+
   // Completes every spill file of the binning pass.
   void finish() {
+    binPending();
     flushAll();
     objects_->finish();
     parametrics_->finish();
@@ -434,38 +438,74 @@ class BrickingSink : public SceneSink {
     object_bounds_[dense].max = glm::max(object_bounds_[dense].max, p);
   }
 
-  void addMesh(const TriangleMesh& original, const Transform& t, uint32_t dense) {
-    // Exact repeats of a triangle go first (repeated_triangles.h); then triangles wound against
-    // their neighbours are turned, so that edge collapse can coarsen the piece and a closed
-    // piece can count as a solid (consistent_winding.h).
-    const std::vector<uint32_t> repeats = repeatedTriangles(original);
-    if (!repeats.empty()) {
-      unrepeated_mesh_ = withoutTriangles(original, repeats);
-      scene_.triangles_repeated += repeats.size();
+  // A mesh piece waiting to be binned. What a piece needs before binning depends on it alone,
+  // so queued pieces are prepared on TBB and binned in reading order (the spill files are the
+  // same whatever the thread count).
+  struct PendingMesh {
+    TriangleMesh mesh;
+    NurbsPatchSet nurbs;  // tessellated into mesh when it has patches
+    Transform t;
+    uint32_t dense = 0;
+    uint64_t repeated = 0, turned = 0;
+    bool solid = false;
+    std::vector<glm::dvec3> relative;  // positions relative to the scene origin, on the step
+  };
+  static constexpr uint64_t kPendingTriangles = 1 << 18;
+
+  void queueMesh(PendingMesh piece) {
+    pending_triangles_ += piece.mesh.indices.size() / 3 + 1;
+    for (const NurbsPatch& patch : piece.nurbs.patches)
+      pending_triangles_ += uint64_t(patch.control_points.size()) * 8;
+    pending_.push_back(std::move(piece));
+    if (pending_triangles_ >= kPendingTriangles) binPending();
+  }
+
+  void binPending() {
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pending_.size(), 1),
+                      [&](const tbb::blocked_range<size_t>& range) {
+                        for (size_t i = range.begin(); i != range.end(); ++i)
+                          prepare(pending_[i]);
+                      });
+    for (PendingMesh& piece : pending_) addMesh(piece);
+    pending_.clear();
+    pending_triangles_ = 0;
+  }
+
+  // Exact repeats of a triangle go first (repeated_triangles.h); then triangles wound against
+  // their neighbours are turned, so that edge collapse can coarsen the piece and a closed piece
+  // can count as a solid (consistent_winding.h).
+  void prepare(PendingMesh& piece) const {
+    if (!piece.nurbs.patches.empty()) {
+      tessellateNurbsConforming(piece.nurbs, options_.nurbs_tolerance, piece.mesh);
+      piece.nurbs = {};
     }
-    const TriangleMesh& input = repeats.empty() ? original : unrepeated_mesh_;
-    const std::vector<uint32_t> turn = trianglesToTurn(input);
-    if (!turn.empty()) {
-      turned_mesh_ = input;
-      turnTriangles(turned_mesh_, turn);
-      scene_.triangles_turned += turn.size();
-    }
-    const TriangleMesh& mesh = turn.empty() ? input : turned_mesh_;
+    const std::vector<uint32_t> repeats = repeatedTriangles(piece.mesh);
+    if (!repeats.empty()) piece.mesh = withoutTriangles(piece.mesh, repeats);
+    piece.repeated = repeats.size();
+    const std::vector<uint32_t> turn = trianglesToTurn(piece.mesh);
+    turnTriangles(piece.mesh, turn);
+    piece.turned = turn.size();
     // An object is a closed solid when each of its mesh pieces is one (closed_surface.h). The
     // transform must keep the orientation: a mirror turns the surface inside out.
-    uint32_t& surface = object_bounds_[dense].surface;
-    if (surface != kOpenSurface) {
-      const bool solid = glm::determinant(glm::dmat3(t.linear)) > 0.0 &&
-                         checkClosedSurface(mesh).enclosesSolid();
-      surface = solid ? kClosedSurface : kOpenSurface;
-    }
-    relative_.resize(mesh.positions.size());
+    piece.solid = glm::determinant(glm::dmat3(piece.t.linear)) > 0.0 &&
+                  checkClosedSurface(piece.mesh).enclosesSolid();
+    piece.relative.resize(piece.mesh.positions.size());
     const double step = options_.position_step_m;
-    for (size_t i = 0; i < mesh.positions.size(); ++i) {
-      relative_[i] = t.apply(mesh.positions[i]) - scene_.origin;
-      if (step > 0.0 && std::isfinite(relative_[i].x + relative_[i].y + relative_[i].z))
-        relative_[i] = glm::round(relative_[i] / step) * step;
+    for (size_t i = 0; i < piece.mesh.positions.size(); ++i) {
+      glm::dvec3& r = piece.relative[i];
+      r = piece.t.apply(piece.mesh.positions[i]) - scene_.origin;
+      if (step > 0.0 && std::isfinite(r.x + r.y + r.z)) r = glm::round(r / step) * step;
     }
+  }
+
+  void addMesh(const PendingMesh& piece) {
+    scene_.triangles_repeated += piece.repeated;
+    scene_.triangles_turned += piece.turned;
+    uint32_t& surface = object_bounds_[piece.dense].surface;
+    if (surface != kOpenSurface) surface = piece.solid ? kClosedSurface : kOpenSurface;
+    const TriangleMesh& mesh = piece.mesh;
+    const std::vector<glm::dvec3>& relative_ = piece.relative;
+    const uint32_t dense = piece.dense;
     const size_t n = mesh.indices.size() / 3 * 3;
     for (size_t i = 0; i < n; i += 3) {
       TriangleRecord record;
@@ -548,9 +588,8 @@ class BrickingSink : public SceneSink {
   std::unordered_map<uint32_t, uint32_t> id_map_;
   bool has_last_ = false;
   uint32_t last_id_ = 0, last_dense_ = 0;
-  std::vector<glm::dvec3> relative_;
-  TriangleMesh turned_mesh_;  // addMesh: the input with some triangles reversed
-  TriangleMesh unrepeated_mesh_;  // addMesh: the input without its repeated triangles
+  std::vector<PendingMesh> pending_;
+  uint64_t pending_triangles_ = 0;
 };
 
 // Splits an over-full brick file into two by streaming it: halves its centroid bounds along the
@@ -702,6 +741,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     read_options.cad_tolerance_m = options.cad_tolerance_m;
     read_options.warn = [](const std::string&) {};  // the survey's reading reported them
     readScene(inputs[i], sink, read_options);
+    sink.endInput();
     checkCancelled(options.progress);
     base += fileBytes(inputs[i]);
   }
