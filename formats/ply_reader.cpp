@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "file_reader.h"
+#include "spilled_array.h"
 #include "text_scan.h"
 
 namespace tw {
@@ -275,10 +276,12 @@ VertexLayout vertexLayout(const FileReader& reader, const Element& e) {
   return layout;
 }
 
+// Filled in file order while the vertex element is read; past ReadOptions::vertex_memory_bytes
+// it spills to a temporary file in ReadOptions::spill_dir (spilled_array.h).
 struct VertexTable {
-  std::vector<glm::vec3> positions;
-  std::vector<glm::vec3> normals;  // empty or one per position
-  std::vector<uint32_t> colors;    // empty or one per position
+  SpilledArray<glm::vec3> positions;
+  SpilledArray<glm::vec3> normals;  // empty or one per position
+  SpilledArray<uint32_t> colors;    // empty or one per position
 };
 
 inline bool fitsFloat(double v) { return std::fabs(v) <= std::numeric_limits<float>::max(); }
@@ -295,7 +298,10 @@ class PartBuilder {
 
   // Call once the vertex table is complete.
   void start() {
-    remap_.assign(table_.positions.size(), kUnmapped);
+    // A part holds at most max_indices_ distinct vertices: the table stays under half full.
+    size_t slots = 16;
+    while (slots < 2 * max_indices_) slots *= 2;
+    remap_.assign(slots, Slot{kUnmapped, 0});
     mesh().indices.reserve(std::min<size_t>(max_indices_, size_t{1} << 20));
   }
 
@@ -311,8 +317,8 @@ class PartBuilder {
     TriangleMesh& m = mesh();
     if (m.indices.empty()) return;
     sink_.onObject(part_);
-    for (uint32_t g : globals_) remap_[g] = kUnmapped;
-    globals_.clear();
+    for (size_t slot : used_slots_) remap_[slot].global = kUnmapped;
+    used_slots_.clear();
     m.positions.clear();
     m.normals.clear();
     m.colors.clear();
@@ -322,15 +328,27 @@ class PartBuilder {
  private:
   TriangleMesh& mesh() { return *std::get_if<TriangleMesh>(&part_.geometry); }
 
+  // The slot of global vertex g in the open-addressing table: its own, or the empty one where
+  // it goes. A part's slots are emptied together when it is flushed, so no probe chain breaks.
+  inline size_t slotOf(uint32_t g) const {
+    const size_t mask = remap_.size() - 1;
+    size_t i = (size_t{g} * 0x9E3779B1u) & mask;
+    while (remap_[i].global != kUnmapped && remap_[i].global != g) i = (i + 1) & mask;
+    return i;
+  }
+
   inline uint32_t local(uint32_t g) {
-    uint32_t& slot = remap_[g];
-    if (slot == kUnmapped) {
+    const size_t at = slotOf(g);
+    Slot& entry = remap_[at];
+    uint32_t& slot = entry.local;
+    if (entry.global == kUnmapped) {
+      entry.global = g;
+      used_slots_.push_back(at);
       TriangleMesh& m = mesh();
       slot = static_cast<uint32_t>(m.positions.size());
       m.positions.push_back(table_.positions[g]);
       if (!table_.normals.empty()) m.normals.push_back(table_.normals[g]);
       if (!table_.colors.empty()) m.colors.push_back(table_.colors[g]);
-      globals_.push_back(g);
     }
     return slot;
   }
@@ -339,8 +357,11 @@ class PartBuilder {
   SceneSink& sink_;
   size_t max_indices_;
   SceneObject part_;
-  std::vector<uint32_t> remap_;    // global -> local index in the current part, or kUnmapped
-  std::vector<uint32_t> globals_;  // global indices of the current part's vertices
+  struct Slot {
+    uint32_t global, local;
+  };
+  std::vector<Slot> remap_;        // global -> local index in the current part (hashed)
+  std::vector<size_t> used_slots_;  // the current part's slots in remap_
 };
 
 // ---- The reader -----------------------------------------------------------------------------
@@ -436,16 +457,17 @@ class PlyParser {
       if (ascii()) reader_.failAtLine(reason);
       reader_.failAt(byte_offset, reason);
     }
-    table_.positions[i] = glm::vec3(float(v[kX]), float(v[kY]), float(v[kZ]));
+    table_.positions.push_back(glm::vec3(float(v[kX]), float(v[kY]), float(v[kZ])));
     if (layout_.has_normals) {
       glm::dvec3 n(v[kNx], v[kNy], v[kNz]);
       // A non-finite normal is harmless to skip but not to pass on.
       bool ok = fitsFloat(n.x) && fitsFloat(n.y) && fitsFloat(n.z);
-      table_.normals[i] = ok ? glm::vec3(n) : glm::vec3(0.0f);
+      table_.normals.push_back(ok ? glm::vec3(n) : glm::vec3(0.0f));
     }
     if (layout_.has_colors) {
       auto byte = [&](Role r) { return static_cast<uint32_t>(v[r]); };
-      table_.colors[i] = byte(kRed) | byte(kGreen) << 8 | byte(kBlue) << 16 | byte(kAlpha) << 24;
+      table_.colors.push_back(byte(kRed) | byte(kGreen) << 8 | byte(kBlue) << 16 |
+                              byte(kAlpha) << 24);
     }
   }
 
@@ -454,10 +476,13 @@ class PlyParser {
     if (e.count > 0xfffffffeull)
       throw FormatError::atLine(reader_.name(), e.line,
                                 "more than 4294967294 vertices are not supported");
-    // checkCounts() has bounded e.count by the file size, so these allocations are too.
-    table_.positions.resize(e.count);
-    if (layout_.has_normals) table_.normals.resize(e.count);
-    if (layout_.has_colors) table_.colors.resize(e.count);
+    // Each present array gets its share of the memory the options allow for vertices.
+    const uint64_t limit = options_.vertex_memory_bytes;
+    const uint64_t per_vertex = 12 + (layout_.has_normals ? 12 : 0) + (layout_.has_colors ? 4 : 0);
+    auto share = [&](uint64_t bytes) { return limit == 0 ? 0 : std::max<uint64_t>(1, limit * bytes / per_vertex); };
+    table_.positions = SpilledArray<glm::vec3>(share(12), options_.spill_dir);
+    if (layout_.has_normals) table_.normals = SpilledArray<glm::vec3>(share(12), options_.spill_dir);
+    if (layout_.has_colors) table_.colors = SpilledArray<uint32_t>(share(4), options_.spill_dir);
     if (ascii())
       readVerticesAscii(e);
     else if (e.hasLists())
@@ -539,15 +564,16 @@ class PlyParser {
       const uint64_t base = reader_.offset();
       for (uint64_t k = 0; plain && k < n; ++k, ++i) {
         const auto* rec = reinterpret_cast<const uint8_t*>(view.data() + k * record);
-        glm::vec3& p = table_.positions[i];
+        glm::vec3 p;
         std::memcpy(&p, rec, 12);
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
           reader_.failAt(base + k * record,
                          "vertex " + std::to_string(i) + " has a non-finite position");
+        table_.positions.push_back(p);
         if (!layout_.has_colors) continue;
-        table_.colors[i] = uint32_t{rec[color_at[0]]} | uint32_t{rec[color_at[1]]} << 8 |
-                           uint32_t{rec[color_at[2]]} << 16 |
-                           (has_alpha ? uint32_t{rec[color_at[3]]} : 255u) << 24;
+        table_.colors.push_back(uint32_t{rec[color_at[0]]} | uint32_t{rec[color_at[1]]} << 8 |
+                                uint32_t{rec[color_at[2]]} << 16 |
+                                (has_alpha ? uint32_t{rec[color_at[3]]} : 255u) << 24);
       }
       for (uint64_t k = 0; !plain && k < n; ++k, ++i) {
         const char* rec = view.data() + k * record;

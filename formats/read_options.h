@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
@@ -31,6 +32,11 @@ struct ReadOptions {
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;
+  // Mesh readers keep every vertex until the last face that may use it (OBJ, PLY): past this
+  // many bytes of them, the rest go to an unlinked temporary file in spill_dir and come back
+  // through a cache (spilled_array.h). 0, or no spill_dir: all in memory.
+  uint64_t vertex_memory_bytes = 0;
+  std::filesystem::path spill_dir;
   // Where a CAD importer tells what it made that the scene does not show ("B-spline faces 189:
   // 84 tessellated conforming ..."). Empty: dropped.
   std::function<void(const std::string&)> note;

@@ -289,16 +289,26 @@ void PreprocessRun::brickInputs() {
     clock_.start("survey");
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
                                      bricking_.exclude_layers, bricking_.up,
-                                     bricking_.cad_primitives, bricking_.cad_tolerance_m);
+                                     bricking_.cad_primitives, bricking_.cad_tolerance_m,
+                                     readerVertexBytes(bricking_.memory_budget_bytes),
+                                     bricking_.work_dir);
     throwIfCancelled(progress_);
     // The budget must hold the smallest brick this run can build (bricks sized from the budget
     // shrink with it down to kMinBrickTriangles) and the per-object and per-instance tables: if
     // it cannot, stop now rather than exceed it.
     const uint64_t smallest_brick =
         bricking_.max_brick_triangles ? bricking_.max_brick_triangles : kMinBrickTriangles;
-    requireMemoryBudget(options_.memory_budget_bytes,
-                        memoryNeed(std::min(smallest_brick, survey.triangles()), survey.objects,
-                                   survey.primitives));
+    try {
+      requireMemoryBudget(options_.memory_budget_bytes,
+                          memoryNeed(std::min(smallest_brick, survey.triangles()),
+                                     survey.objects, survey.primitives));
+    } catch (...) {
+      // The survey's vertex spill may have made the work folder; it holds nothing (the spill
+      // file is unlinked) and a refused run leaves nothing behind.
+      std::error_code ignored;
+      std::filesystem::remove(bricking_.work_dir, ignored);
+      throw;
+    }
     clock_.start("brick");
     scene_ = brickScene(options_.inputs, survey, bricking_);
     storeBrickedScene(cache_, scene_);

@@ -652,7 +652,8 @@ uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,
                         Progress* progress, const std::vector<std::string>& exclude_layers,
-                        UpAxis up, bool cad_primitives, double cad_tolerance_m) {
+                        UpAxis up, bool cad_primitives, double cad_tolerance_m,
+                        uint64_t vertex_memory_bytes, const std::filesystem::path& spill_dir) {
   SceneSurvey survey;
   for (const auto& input : inputs) survey.input_bytes += fileBytes(input);
   beginStage(progress, "survey", survey.input_bytes);
@@ -670,6 +671,8 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float 
     read_options.up = up;
     read_options.cad_primitives = cad_primitives;
     read_options.cad_tolerance_m = cad_tolerance_m;
+    read_options.vertex_memory_bytes = vertex_memory_bytes;
+    read_options.spill_dir = spill_dir;
     readScene(input, fan, read_options);
     checkCancelled(progress);
     survey.bounds.add(stats.bounds);
@@ -740,6 +743,8 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     read_options.cad_primitives = options.cad_primitives;
     read_options.cad_tolerance_m = options.cad_tolerance_m;
     read_options.warn = [](const std::string&) {};  // the survey's reading reported them
+    read_options.vertex_memory_bytes = readerVertexBytes(options.memory_budget_bytes);
+    read_options.spill_dir = scene.work_dir;
     readScene(inputs[i], sink, read_options);
     sink.endInput();
     checkCancelled(options.progress);

@@ -79,13 +79,21 @@ struct SceneSurvey {
 };
 
 // Reads every input with readScene. Throws FormatError for unreadable input,
-// std::runtime_error("cancelled") when `progress` asks to stop.
+// std::runtime_error("cancelled") when `progress` asks to stop. vertex_memory_bytes and
+// spill_dir: ReadOptions' (a reader creates spill_dir when it first spills).
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
                         Progress* progress = nullptr,
                         const std::vector<std::string>& exclude_layers = {},
                         UpAxis up = UpAxis::Auto, bool cad_primitives = true,
-                        double cad_tolerance_m = 0.0);
+                        double cad_tolerance_m = 0.0, uint64_t vertex_memory_bytes = 0,
+                        const std::filesystem::path& spill_dir = {});
+
+// The share of the memory budget a mesh reader may keep its vertex table in before it spills
+// them to the work folder (ReadOptions::vertex_memory_bytes): an eighth.
+constexpr uint64_t readerVertexBytes(uint64_t memory_budget_bytes) {
+  return memory_budget_bytes / 8;
+}
 
 // One non-empty brick. Brick files live in BrickedScene::work_dir.
 struct BrickInfo {

@@ -4,10 +4,12 @@
 #include <sys/resource.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
+#include <random>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -323,6 +325,54 @@ TEST(PlyReader, LargeBinaryGridAcrossBufferBoundaries) {
   }
   EXPECT_EQ(k, expected.size());
   fs::remove(path);  // 13 MB in a memory-backed scratch directory
+}
+
+// A vertex table over its memory limit spills to a file in the spill folder; faces in a random
+// order read their vertices back through the block cache, and every corner is what the
+// in-memory table gives.
+TEST(PlyReader, AVertexTableOverItsLimitSpillsAndReadsTheSameCorners) {
+  constexpr uint32_t kSide = 400;
+  std::string body;
+  std::mt19937 rng(3);
+  std::uniform_int_distribution<int> colour(0, 255);
+  for (uint32_t r = 0; r < kSide; ++r)
+    for (uint32_t c = 0; c < kSide; ++c) {
+      glm::vec3 p(float(c) * 0.25f, float(r) * 0.5f, float((r * 7 + c * 3) % 11));
+      body.append(reinterpret_cast<const char*>(&p), 12);
+      for (int k = 0; k < 3; ++k) body.push_back(char(colour(rng)));
+    }
+  std::vector<std::array<uint32_t, 3>> faces;
+  for (uint32_t r = 0; r + 1 < kSide; ++r)
+    for (uint32_t c = 0; c + 1 < kSide; ++c) {
+      uint32_t a = r * kSide + c, b = a + 1, d = a + kSide, e = d + 1;
+      faces.push_back({a, b, e});
+      faces.push_back({a, e, d});
+    }
+  std::shuffle(faces.begin(), faces.end(), rng);
+  for (const auto& f : faces) {
+    body.push_back(3);
+    for (uint32_t id : f) body.append(reinterpret_cast<const char*>(&id), 4);
+  }
+  std::string file = "ply\nformat binary_little_endian 1.0\nelement vertex " +
+                     std::to_string(kSide * kSide) +
+                     "\nproperty float x\nproperty float y\nproperty float z\n"
+                     "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                     "element face " + std::to_string(faces.size()) +
+                     "\nproperty list uchar uint vertex_indices\nend_header\n" + body;
+  const fs::path path = test::scratchDir() / "spill.ply";
+  const fs::path spill = test::scratchDir() / "spill-dir";
+  fs::create_directories(spill);
+  test::writeFile(path, file);
+  const test::CollectingSink whole = read(path);
+  test::CollectingSink spilled;
+  ReadOptions options;
+  options.vertex_memory_bytes = 64 * 1024;  // of 2.5 MB of vertices
+  options.spill_dir = spill;
+  readPly(path, spilled, options);
+  EXPECT_EQ(corners(spilled), corners(whole));
+  EXPECT_EQ(corners(whole).size(), faces.size() * 3);
+  EXPECT_TRUE(fs::is_empty(spill)) << "nothing is left in the spill folder";
+  fs::remove(path);
 }
 
 class RecordingProgress : public Progress {
