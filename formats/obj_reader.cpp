@@ -23,10 +23,19 @@
 #include <vector>
 
 #include "file_reader.h"
+#include "part_vertex_map.h"
+#include "spilled_array.h"
 #include "text_scan.h"
 
 namespace tw {
 namespace {
+
+// Eighths of ReadOptions::vertex_memory_bytes a pool keeps before it spills: positions 4,
+// normals 3, colours 1.
+uint64_t share(const ReadOptions& options, uint64_t eighths) {
+  if (options.vertex_memory_bytes == 0) return 0;
+  return std::max<uint64_t>(1, options.vertex_memory_bytes / 8 * eighths);
+}
 
 constexpr uint32_t kNone = 0xffffffffu;
 constexpr uint64_t kLinesPerProgressCheck = 1u << 16;
@@ -86,7 +95,11 @@ class ObjParser {
         options_(options),
         directory_(path.parent_path()),
         stem_(path.stem().string()),
-        max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)) {
+        max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)),
+        positions_(share(options, 4), options.spill_dir),
+        normals_(share(options, 3), options.spill_dir),
+        colors_(share(options, 1), options.spill_dir),
+        remap_(size_t{max_part_triangles_} * 3) {
     part_.geometry = TriangleMesh{};
     mesh_ = &std::get<TriangleMesh>(part_.geometry);
     object_name_ = stem_;
@@ -116,10 +129,6 @@ class ObjParser {
   }
 
  private:
-  struct RemapSlot {
-    uint32_t stamp = 0;  // part generation that owns `local`
-    uint32_t local = 0;
-  };
   struct Corner {
     uint32_t v;
     uint32_t vn;
@@ -177,11 +186,10 @@ class ObjParser {
     }
     if (extras == 2 || extras == 4) in_.failAtLine("bad vertex: expected x y z [w] or x y z r g b");
     if (positions_.size() >= kNone - 1) in_.failAtLine("more than 4 billion vertices");
-    positions_.emplace_back(p[0], p[1], p[2]);
-    remap_.emplace_back();
+    positions_.push_back(glm::vec3(p[0], p[1], p[2]));
     if (extras == 3) {
       // Colours are rare: the pool is only created at the first coloured vertex.
-      if (colors_.size() < positions_.size() - 1) colors_.resize(positions_.size() - 1, 0);
+      while (colors_.size() + 1 < positions_.size()) colors_.push_back(0);
       colors_.push_back(packColor(extra[0], extra[1], extra[2]));
     } else if (!colors_.empty()) {
       colors_.push_back(0);  // 0 = no colour given (real colours always have alpha 255)
@@ -194,7 +202,7 @@ class ObjParser {
         !text::parseFloat(rest, n[2]))
       in_.failAtLine("bad normal: expected numbers x y z");
     if (normals_.size() >= kNone - 1) in_.failAtLine("more than 4 billion normals");
-    normals_.emplace_back(n[0], n[1], n[2]);
+    normals_.push_back(glm::vec3(n[0], n[1], n[2]));
   }
 
   void parseTexCoord(std::string_view rest) {
@@ -284,18 +292,16 @@ class ObjParser {
   // (a hard edge) becomes two local vertices; those rare pairs go through a hash map.
   uint32_t localVertex(const Corner& c) {
     if (c.vn == kNone) part_missing_normal_ = true;
-    RemapSlot& slot = remap_[c.v];
-    if (slot.stamp == stamp_) {
-      uint32_t vn = local_normal_[slot.local];
-      if (vn == c.vn || vn == kNone || c.vn == kNone) return slot.local;
+    const uint32_t local = remap_.find(c.v);
+    if (local != PartVertexMap::kNone) {
+      uint32_t vn = local_normal_[local];
+      if (vn == c.vn || vn == kNone || c.vn == kNone) return local;
       uint64_t key = uint64_t{c.v} << 32 | c.vn;
       auto [it, inserted] = split_vertices_.try_emplace(key, 0);
       if (inserted) it->second = newLocal(c);
       return it->second;
     }
-    slot.stamp = stamp_;
-    slot.local = newLocal(c);
-    return slot.local;
+    return remap_.localOf(c.v, [&] { return newLocal(c); });
   }
 
   uint32_t newLocal(const Corner& c) {
@@ -341,10 +347,7 @@ class ObjParser {
     local_normal_.clear();
     split_vertices_.clear();
     part_missing_normal_ = false;
-    if (++stamp_ == 0) {  // wrapped after 4 billion parts: forget every stale stamp
-      for (RemapSlot& s : remap_) s.stamp = 0;
-      stamp_ = 1;
-    }
+    remap_.clear();
   }
 
   // Ends the current object if it has faces; the next faces belong to a new one.
@@ -405,11 +408,11 @@ class ObjParser {
   std::string stem_;
   uint32_t max_part_triangles_;
 
-  // Global pools (the OBJ index space).
-  std::vector<glm::vec3> positions_;
-  std::vector<glm::vec3> normals_;
-  std::vector<uint32_t> colors_;  // empty, or one per position (0 = none)
-  std::vector<RemapSlot> remap_;  // one per position
+  // Global pools (the OBJ index space), spilled past ReadOptions::vertex_memory_bytes.
+  SpilledArray<glm::vec3> positions_;
+  SpilledArray<glm::vec3> normals_;
+  SpilledArray<uint32_t> colors_;  // empty, or one per position (0 = none)
+  PartVertexMap remap_;            // global position -> part-local vertex
   uint64_t texcoord_count_ = 0;
 
   // Current object and part.
@@ -424,7 +427,6 @@ class ObjParser {
   std::vector<uint32_t> local_normal_;  // part-local vertex -> global normal or kNone
   std::unordered_map<uint64_t, uint32_t> split_vertices_;
   bool part_missing_normal_ = false;
-  uint32_t stamp_ = 1;
 
   // Scratch for one face.
   std::vector<Corner> corners_;

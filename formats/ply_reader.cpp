@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "file_reader.h"
+#include "part_vertex_map.h"
 #include "spilled_array.h"
 #include "text_scan.h"
 
@@ -27,7 +28,6 @@ constexpr uint64_t kProgressStepBytes = uint64_t{8} << 20;
 // handful of elements with a handful of properties each.
 constexpr size_t kMaxElements = 1024;
 constexpr size_t kMaxProperties = 1024;  // per element
-constexpr uint32_t kUnmapped = 0xffffffffu;
 
 // ---- Scalar types --------------------------------------------------------------------------
 
@@ -298,10 +298,7 @@ class PartBuilder {
 
   // Call once the vertex table is complete.
   void start() {
-    // A part holds at most max_indices_ distinct vertices: the table stays under half full.
-    size_t slots = 16;
-    while (slots < 2 * max_indices_) slots *= 2;
-    remap_.assign(slots, Slot{kUnmapped, 0});
+    remap_ = PartVertexMap(max_indices_);
     mesh().indices.reserve(std::min<size_t>(max_indices_, size_t{1} << 20));
   }
 
@@ -317,8 +314,7 @@ class PartBuilder {
     TriangleMesh& m = mesh();
     if (m.indices.empty()) return;
     sink_.onObject(part_);
-    for (size_t slot : used_slots_) remap_[slot].global = kUnmapped;
-    used_slots_.clear();
+    remap_.clear();
     m.positions.clear();
     m.normals.clear();
     m.colors.clear();
@@ -328,40 +324,22 @@ class PartBuilder {
  private:
   TriangleMesh& mesh() { return *std::get_if<TriangleMesh>(&part_.geometry); }
 
-  // The slot of global vertex g in the open-addressing table: its own, or the empty one where
-  // it goes. A part's slots are emptied together when it is flushed, so no probe chain breaks.
-  inline size_t slotOf(uint32_t g) const {
-    const size_t mask = remap_.size() - 1;
-    size_t i = (size_t{g} * 0x9E3779B1u) & mask;
-    while (remap_[i].global != kUnmapped && remap_[i].global != g) i = (i + 1) & mask;
-    return i;
-  }
-
   inline uint32_t local(uint32_t g) {
-    const size_t at = slotOf(g);
-    Slot& entry = remap_[at];
-    uint32_t& slot = entry.local;
-    if (entry.global == kUnmapped) {
-      entry.global = g;
-      used_slots_.push_back(at);
+    return remap_.localOf(g, [&] {
       TriangleMesh& m = mesh();
-      slot = static_cast<uint32_t>(m.positions.size());
+      const auto slot = static_cast<uint32_t>(m.positions.size());
       m.positions.push_back(table_.positions[g]);
       if (!table_.normals.empty()) m.normals.push_back(table_.normals[g]);
       if (!table_.colors.empty()) m.colors.push_back(table_.colors[g]);
-    }
-    return slot;
+      return slot;
+    });
   }
 
   const VertexTable& table_;
   SceneSink& sink_;
   size_t max_indices_;
   SceneObject part_;
-  struct Slot {
-    uint32_t global, local;
-  };
-  std::vector<Slot> remap_;        // global -> local index in the current part (hashed)
-  std::vector<size_t> used_slots_;  // the current part's slots in remap_
+  PartVertexMap remap_;  // global -> local index in the current part
 };
 
 // ---- The reader -----------------------------------------------------------------------------

@@ -196,6 +196,34 @@ TEST(ObjReader, KicadConnectorObjectsAndTriangles) {
   }
 }
 
+// Past ReadOptions::vertex_memory_bytes the vertex and normal pools spill to a file in the spill
+// folder: the parts handed to the sink are the same as with the pools in memory, and the folder
+// holds nothing afterwards (the file is unlinked at once).
+TEST(ObjReader, VertexPoolsOverTheirLimitSpillAndGiveTheSameParts) {
+  const auto path = test::sharedDataDir() / "kicad_dsub62.obj";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << "missing " << path;
+  const std::filesystem::path spill = test::scratchDir() / "obj-spill";
+  std::filesystem::remove_all(spill);
+  ReadOptions options;
+  options.vertex_memory_bytes = 32 * 1024;  // of about 1.6 MB of positions and normals
+  options.spill_dir = spill;
+  options.max_part_triangles = 100;
+  ReadOptions in_memory;
+  in_memory.max_part_triangles = 100;
+  const CollectingSink spilled = readAll(path, options), whole = readAll(path, in_memory);
+  ASSERT_EQ(spilled.objects.size(), whole.objects.size());
+  ASSERT_GT(whole.objects.size(), 648u) << "parts of large objects, so parts end mid-object";
+  for (size_t i = 0; i < whole.objects.size(); ++i) {
+    const TriangleMesh &a = meshOf(spilled.objects[i]), &b = meshOf(whole.objects[i]);
+    ASSERT_EQ(spilled.objects[i].info.id, whole.objects[i].info.id) << i;
+    ASSERT_EQ(a.indices, b.indices) << i;
+    ASSERT_EQ(a.positions, b.positions) << i;
+    ASSERT_EQ(a.normals, b.normals) << i;
+  }
+  EXPECT_TRUE(std::filesystem::is_directory(spill)) << "the pools did spill";
+  EXPECT_TRUE(std::filesystem::is_empty(spill));
+}
+
 TEST(ObjReader, BunnyIsOneObject) {
   CollectingSink s = readAll(test::sharedDataDir() / "stanford-bunny.obj");
   // 69,451 triangles exceed the default part size of 65,536: two parts of one object.
