@@ -18,6 +18,23 @@ namespace {
                            std::strerror(errno));
 }
 
+enum class Direction { kRead, kWrite };
+
+// All `bytes` at `offset` read into, or written from, `data`: resumed after short counts and
+// signals. False on an error or an early end of file.
+bool transfer(Direction direction, int fd, uint8_t* data, uint64_t bytes, uint64_t offset) {
+  while (bytes > 0) {
+    const ssize_t n = direction == Direction::kRead ? ::pread(fd, data, bytes, off_t(offset))
+                                                    : ::pwrite(fd, data, bytes, off_t(offset));
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    data += n;
+    offset += uint64_t(n);
+    bytes -= uint64_t(n);
+  }
+  return true;
+}
+
 }  // namespace
 
 SpilledBlocks::SpilledBlocks(uint32_t value_bytes, uint64_t memory_limit,
@@ -75,17 +92,8 @@ void SpilledBlocks::spillFullBlocks() {
     cache_block_.assign(slots, UINT64_MAX);
   }
   for (std::unique_ptr<uint8_t[]>& block : blocks_) {
-    const uint8_t* data = block.get();
-    uint64_t left = block_bytes_;
-    off_t at = off_t(spilled_blocks_ * block_bytes_);
-    while (left > 0) {
-      const ssize_t n = ::pwrite(fd_, data, left, at);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) spillFail(spill_dir_, "write failed");
-      data += n;
-      at += n;
-      left -= uint64_t(n);
-    }
+    if (!transfer(Direction::kWrite, fd_, block.get(), block_bytes_, spilled_blocks_ * block_bytes_))
+      spillFail(spill_dir_, "write failed");
     ++spilled_blocks_;
   }
   blocks_.clear();
@@ -95,17 +103,8 @@ const uint8_t* SpilledBlocks::cachedBlock(uint64_t block) const {
   const size_t slot = size_t(block % cache_.size());
   if (cache_block_[slot] != block) {
     if (!cache_[slot]) cache_[slot] = std::make_unique<uint8_t[]>(block_bytes_);
-    uint8_t* data = cache_[slot].get();
-    uint64_t left = block_bytes_;
-    off_t at = off_t(block * block_bytes_);
-    while (left > 0) {
-      const ssize_t n = ::pread(fd_, data, left, at);
-      if (n < 0 && errno == EINTR) continue;
-      if (n <= 0) spillFail(spill_dir_, "read failed");
-      data += n;
-      at += n;
-      left -= uint64_t(n);
-    }
+    if (!transfer(Direction::kRead, fd_, cache_[slot].get(), block_bytes_, block * block_bytes_))
+      spillFail(spill_dir_, "read failed");
     cache_block_[slot] = block;
   }
   return cache_[slot].get();

@@ -363,6 +363,17 @@ void expectWellFormed(const ClusterDag& dag, const DagOptions& options, uint64_t
   }
 }
 
+// Every level of more than a thousand triangles comes down to between 0.3 and 0.65 of it: it
+// halves, neither stalling nor collapsing.
+void expectEveryLevelHalves(const ClusterDag& dag) {
+  for (size_t l = 1; l < dag.levelCount(); ++l) {
+    if (dag.triangles_per_level[l - 1] <= 1000) continue;
+    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
+    EXPECT_GE(ratio, 0.3) << "level " << l << " collapsed";
+    EXPECT_LE(ratio, 0.65) << "level " << l << " did not halve";
+  }
+}
+
 void reportDag(const char* name, const ClusterDag& dag, double seconds) {
   std::string levels;
   for (size_t l = 0; l < dag.levelCount(); ++l)
@@ -605,12 +616,7 @@ TEST(ClusterDag, ManySmallPartsHalveEveryLevelToOneCluster) {
   ClusterDag dag = tw::buildClusterDag(m.input(), options);
   reportDag("300 boxes + 300 cylinders", dag, -1.0);
   expectWellFormed(dag, options, m.triangles());
-  for (size_t l = 1; l < dag.levelCount(); ++l) {
-    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
-    if (dag.triangles_per_level[l - 1] <= 1000) continue;
-    EXPECT_GE(ratio, 0.3) << "level " << l << " collapsed";
-    EXPECT_LE(ratio, 0.65) << "level " << l << " did not halve";
-  }
+  expectEveryLevelHalves(dag);
   EXPECT_EQ(dag.clusters_per_level.back(), 1u);
   for (const tw::DagGroup& g : dag.groups)
     for (uint32_t c : g.children) EXPECT_GT(g.error, dag.clusters[c].error);
@@ -649,12 +655,7 @@ TEST(ClusterDag, VertexClusteringHalvesOpenPartsLockedCollapseCannotTouch) {
   expectWellFormed(dag, options, m.triangles());
   EXPECT_GT(dag.stats.groups_merged, 0u);
   EXPECT_EQ(dag.stats.level_retries, 0u);
-  for (size_t l = 1; l < dag.levelCount(); ++l) {
-    if (dag.triangles_per_level[l - 1] <= 1000) continue;
-    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
-    EXPECT_GE(ratio, 0.3) << "level " << l;
-    EXPECT_LE(ratio, 0.65) << "level " << l;
-  }
+  expectEveryLevelHalves(dag);
   EXPECT_EQ(dag.clusters_per_level.back(), 1u);
   expectCrackFreeCuts(dag, m);
   std::set<uint32_t> input_ids(m.ids.begin(), m.ids.end());
@@ -858,12 +859,7 @@ TEST(ClusterDag, KicadConnector) {
   // shrink keep their results, and every level still halves.
   EXPECT_GT(dag.stats.level_retries, 0u);
   EXPECT_GT(dag.stats.groups_kept_on_retry, 0u);
-  for (size_t l = 1; l < dag.levelCount(); ++l) {
-    if (dag.triangles_per_level[l - 1] <= 1000) continue;
-    const double ratio = double(dag.triangles_per_level[l]) / double(dag.triangles_per_level[l - 1]);
-    EXPECT_GE(ratio, 0.3) << "level " << l;
-    EXPECT_LE(ratio, 0.65) << "level " << l;
-  }
+  expectEveryLevelHalves(dag);
   size_t overused = 0;
   expectCrackFreeCuts(dag, m, &overused);
   std::printf("[ dag ] kicad_dsub62: at most %zu more edges with over two triangles in a cut than the input\n",
