@@ -5,6 +5,8 @@
 #include <bit>
 #include <cmath>
 
+#include <xxhash.h>
+
 #include "position_key.h"
 
 namespace tw {
@@ -15,6 +17,8 @@ SeamEdgeKey seamEdgeKey(const glm::vec3& a, const glm::vec3& b) {
   return pa < pb ? SeamEdgeKey{pa[0], pa[1], pa[2], pb[0], pb[1], pb[2]}
                  : SeamEdgeKey{pb[0], pb[1], pb[2], pa[0], pa[1], pa[2]};
 }
+
+uint64_t seamEdgeHash(const SeamEdgeKey& key) { return XXH3_64bits(key.data(), sizeof key); }
 
 namespace {
 
@@ -66,10 +70,21 @@ std::vector<SeamEdgeKey> edgeKeys(std::span<const glm::vec3> positions,
 }
 
 BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick) {
-  // Each list is sorted and unique, so a key at the head of two or more lists at once is in two
+  std::vector<std::vector<uint64_t>> hashes(per_brick.size());
+  for (size_t b = 0; b < per_brick.size(); ++b) {
+    for (const SeamEdgeKey& key : per_brick[b]) hashes[b].push_back(seamEdgeHash(key));
+    per_brick[b] = {};
+    std::sort(hashes[b].begin(), hashes[b].end());
+    hashes[b].erase(std::unique(hashes[b].begin(), hashes[b].end()), hashes[b].end());
+  }
+  return fromSortedHashes(hashes);
+}
+
+BrickSeams BrickSeams::fromSortedHashes(const std::vector<std::vector<uint64_t>>& per_brick) {
+  // Each list is sorted and unique, so a hash at the head of two or more lists at once is in two
   // or more bricks. A merge of the heads (smallest first) finds them without a concatenated copy
   // of every list, which at 100M triangles was the stage's peak (0.7 GB on top of the lists).
-  using Head = std::pair<const SeamEdgeKey*, const SeamEdgeKey*>;  // next, end
+  using Head = std::pair<const uint64_t*, const uint64_t*>;  // next, end
   auto later = [](const Head& a, const Head& b) { return *b.first < *a.first; };
   std::vector<Head> heads;
   for (const auto& list : per_brick)
@@ -77,9 +92,9 @@ BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_b
   std::make_heap(heads.begin(), heads.end(), later);
   BrickSeams seams;
   while (!heads.empty()) {
-    const SeamEdgeKey key = *heads.front().first;
+    const uint64_t hash = *heads.front().first;
     size_t lists = 0;
-    while (!heads.empty() && *heads.front().first == key) {
+    while (!heads.empty() && *heads.front().first == hash) {
       std::pop_heap(heads.begin(), heads.end(), later);
       Head& head = heads.back();
       ++lists;
@@ -88,7 +103,7 @@ BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_b
       else
         std::push_heap(heads.begin(), heads.end(), later);
     }
-    if (lists >= 2) seams.keys_.push_back(key);
+    if (lists >= 2) seams.hashes_.push_back(hash);
   }
   return seams;
 }
@@ -112,7 +127,7 @@ BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
            glm::all(glm::lessThanEqual(p, box.bounds_max + pad));
   };
   beginStage(progress, "find seams", n);
-  std::vector<std::vector<SeamEdgeKey>> per_brick(n);
+  std::vector<std::vector<uint64_t>> per_brick(n);
   for (uint32_t b = 0; b < n; ++b) {
     std::vector<uint32_t> neighbours;
     for (uint32_t o = 0; o < n; ++o)
@@ -126,20 +141,23 @@ BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
                                        std::bit_cast<float>(key[5]));
         for (uint32_t o : neighbours)
           if (inside(scene.bricks[o], p0) && inside(scene.bricks[o], p1)) {
-            per_brick[b].push_back(key);
+            per_brick[b].push_back(seamEdgeHash(key));
             break;
           }
       }
+      std::sort(per_brick[b].begin(), per_brick[b].end());
+      per_brick[b].erase(std::unique(per_brick[b].begin(), per_brick[b].end()),
+                         per_brick[b].end());
       per_brick[b].shrink_to_fit();  // held until every brick is read
     }
     updateProgress(progress, b + 1);
   }
   endStage(progress);
-  return fromOpenEdges(std::move(per_brick));
+  return fromSortedHashes(per_brick);
 }
 
 bool BrickSeams::contains(const glm::vec3& a, const glm::vec3& b) const {
-  return std::binary_search(keys_.begin(), keys_.end(), seamEdgeKey(a, b));
+  return std::binary_search(hashes_.begin(), hashes_.end(), seamEdgeHash(seamEdgeKey(a, b)));
 }
 
 }  // namespace tw

@@ -93,12 +93,14 @@ struct BrickRecord {
 };
 
 // A brick's snapping input: its seams and roots are shared with other pieces.
-SnapPiece brickSnapPiece(const ClusterDag& dag, BrickRecord& brick) {
+SnapPiece brickSnapPiece(const ClusterDag& dag, BrickRecord& brick,
+                         std::function<bool(const glm::vec3&)> near_other_brick) {
   if (dag.clusters.size() != brick.cluster_count)
     throw std::runtime_error("preprocess: a brick changed in the resume store during the run");
   brick.exported.assign(brick.cluster_count, 0);
   for (uint32_t id : brick.root_ids) brick.exported[id] = 1;
-  return {dag.clusters, brick.exported, SharedPositions::SeamsAndRoots};
+  return {dag.clusters, brick.exported, SharedPositions::SeamsAndRoots,
+          std::move(near_other_brick)};
 }
 
 std::unique_ptr<ClusterDag> loadBrickDag(const BrickCache& cache, uint32_t b) {
@@ -412,7 +414,7 @@ void PreprocessRun::buildBricks() {
     // is where the peak is. A one-brick model is then never read back (nor welded twice).
     const bool keep = b + 1 == scene_.bricks.size() && dag_bytes <= resident_limit;
     const auto snap_start = Clock::now();
-    snapper_.solve(b, brickSnapPiece(dag, brick), keep);
+    snapper_.solve(b, brickSnapPiece(dag, brick, optionsForBrick(b).is_near_other_brick), keep);
     snap_in_build_ += secondsSince(snap_start);
     if (keep) resident_[b] = std::make_unique<ClusterDag>(std::move(dag));
     updateProgress(progress_, b + 1);
@@ -508,7 +510,8 @@ void PreprocessRun::snapToFixpoint() {
       }
       std::unique_ptr<ClusterDag> loaded;
       const ClusterDag& dag = resident_[p] ? *resident_[p] : *(loaded = loadBrickDag(cache_, p));
-      snapper_.solve(p, brickSnapPiece(dag, bricks_[p]), resident_[p] != nullptr);
+      snapper_.solve(p, brickSnapPiece(dag, bricks_[p], optionsForBrick(p).is_near_other_brick),
+                      resident_[p] != nullptr);
       ++report_.bricks_resolved;
     }
   }
@@ -548,7 +551,8 @@ void PreprocessRun::packMeshClusters() {
         resident_[b] ? std::move(resident_[b]) : loadBrickDag(cache_, b);
     BrickRecord& brick = bricks_[b];
     const auto snap_start = Clock::now();
-    const auto snapped = snapper_.snap(b, brickSnapPiece(*dag, brick), shifts);
+    const auto snapped =
+        snapper_.snap(b, brickSnapPiece(*dag, brick, optionsForBrick(b).is_near_other_brick), shifts);
     snap_in_pack_ += secondsSince(snap_start);
     renumberBrick(*dag, brick);
     addDagPieceToPackage(*dag, brick.first_cluster, brick.first_group, snapped, shifts, placement,

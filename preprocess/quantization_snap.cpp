@@ -150,7 +150,10 @@ QuantizationSnapper::Weld QuantizationSnapper::weldPiece(const SnapPiece& input)
     for (size_t i = 0; i < edges.size();) {
       size_t j = i + 1;
       while (j < edges.size() && edges[j] == edges[i]) ++j;
-      if (j - i != 2) w.shared[uint32_t(edges[i] >> 32)] = w.shared[uint32_t(edges[i])] = 1;
+      if (j - i != 2)
+        for (uint32_t id : {uint32_t(edges[i] >> 32), uint32_t(edges[i])})
+          if (!input.may_be_elsewhere || input.may_be_elsewhere(w.first_position[id]))
+            w.shared[id] = 1;
       i = j;
     }
   }

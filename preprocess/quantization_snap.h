@@ -28,6 +28,8 @@
 #include <unordered_map>
 #include <vector>
 
+#include <functional>
+
 #include <glm/glm.hpp>
 
 #include "cluster_dag.h"
@@ -47,6 +49,11 @@ struct SnapPiece {
   std::span<const DagCluster> clusters;
   std::span<const uint8_t> exported;  // SeamsAndRoots: one per cluster, nonzero = shared
   SharedPositions shared = SharedPositions::None;
+  // SeamsAndRoots: whether a position could also be another piece's (it lies within another
+  // brick's bounds). The vertices of edges not used twice are shared only where it holds, so
+  // the model's own open edges far from other bricks stay out of the shared table, which would
+  // otherwise grow with the model (uncapped pipes: most of the plant's open edges). Empty: all.
+  std::function<bool(const glm::vec3&)> may_be_elsewhere;
 };
 
 class QuantizationSnapper {
