@@ -105,10 +105,14 @@ bool parseInt64(std::string_view& s, int64_t& out) {
   bool negative = false;
   if (i < s.size() && (s[i] == '-' || s[i] == '+')) negative = s[i++] == '-';
   if (i >= s.size() || !isDigit(s[i])) return false;
+  // Checked before each step: value * 10 + digit must stay within int64 (testing after the
+  // step missed wraps of the uint64 itself: 18446744073709551624 read as 8).
+  constexpr uint64_t kMax = static_cast<uint64_t>(std::numeric_limits<int64_t>::max());
   uint64_t value = 0;
   while (i < s.size() && isDigit(s[i])) {
-    value = value * 10 + static_cast<uint64_t>(s[i] - '0');
-    if (value > static_cast<uint64_t>(std::numeric_limits<int64_t>::max())) return false;
+    const uint64_t digit = static_cast<uint64_t>(s[i] - '0');
+    if (value > (kMax - digit) / 10) return false;
+    value = value * 10 + digit;
     ++i;
   }
   if (!isEndOfNumber(s, i)) return false;

@@ -83,7 +83,7 @@ BrickSeams BrickSeams::fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_b
 BrickSeams BrickSeams::fromSortedHashes(const std::vector<std::vector<uint64_t>>& per_brick) {
   // Each list is sorted and unique, so a hash at the head of two or more lists at once is in two
   // or more bricks. A merge of the heads (smallest first) finds them without a concatenated copy
-  // of every list, which at 100M triangles was the stage's peak (0.7 GB on top of the lists).
+  // of every list, which at 100M triangles was the stage's peak (about 0.5 GB on top of them).
   using Head = std::pair<const uint64_t*, const uint64_t*>;  // next, end
   auto later = [](const Head& a, const Head& b) { return *b.first < *a.first; };
   std::vector<Head> heads;

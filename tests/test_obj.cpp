@@ -285,6 +285,8 @@ TEST(ObjReader, ErrorsNameFileLineAndReason) {
   const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
   expectLineError(tri + "f 1 2 0\n", 4, "index 0");
   expectLineError(tri + "f 1 2 4\n", 4, "vertex index 4 out of range (3 defined so far)");
+  // 2^64 + 3 wrapped to index 3 once (a valid vertex): now refused at its line.
+  expectLineError(tri + "f 1 2 18446744073709551619\n", 4, "bad face: expected vertex indices");
   expectLineError(tri + "f -1 -2 -4\n", 4, "vertex index -4 out of range");
   expectLineError(tri + "f 1 2\n", 4, "face with 2 vertices");
   expectLineError(tri + "f 1 2 x\n", 4, "bad face");

@@ -452,6 +452,12 @@ TEST(PlyReader, BadHeadersNameTheLine) {
   EXPECT_EQ(e.position(), 5u);
   EXPECT_NE(e.reason().find("unknown property type 'quad'"), std::string::npos) << e.what();
 
+  // 2^64 + 8 wrapped to a count of 8 once: now refused on its line.
+  e = errorFor("ply\nformat ascii 1.0\nelement vertex 18446744073709551624\nproperty float x\n"
+               "property float y\nproperty float z\nend_header\n0 0 0\n");
+  EXPECT_EQ(e.position(), 3u) << e.what();
+  EXPECT_NE(e.reason().find("bad element declaration"), std::string::npos) << e.what();
+
   e = errorFor("PLY?\n");
   EXPECT_EQ(e.position(), 1u);
   EXPECT_NE(e.reason().find("not a PLY file"), std::string::npos);

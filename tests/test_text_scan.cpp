@@ -1,6 +1,8 @@
 // Number scanning used by every text reader: exact on common forms, strict on garbage.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <cmath>
 #include <cstdlib>
 #include <string>
@@ -82,6 +84,23 @@ TEST(TextScan, IntegersIncludingNegativeAndOverflow) {
   EXPECT_FALSE(parseInt64(big, a));
   std::string_view frac = "3.5";
   EXPECT_FALSE(parseInt64(frac, a));
+}
+
+// Numbers past int64 that wrap the uint64 accumulator itself (2^64 + 8 and 2^64 + 3) are refused,
+// not read as 8 and 3; the largest int64 still reads.
+TEST(TextScan, IntegersThatWrapSixtyFourBitsAreRefused) {
+  int64_t a = 0;
+  for (std::string_view wrapping : {"18446744073709551624", "18446744073709551619",
+                                    "9223372036854775808", "-9223372036854775809"}) {
+    std::string_view v = wrapping;
+    EXPECT_FALSE(parseInt64(v, a)) << wrapping << " read as " << a;
+  }
+  std::string_view largest = "9223372036854775807";
+  ASSERT_TRUE(parseInt64(largest, a));
+  EXPECT_EQ(a, std::numeric_limits<int64_t>::max());
+  std::string_view negative = "-9223372036854775807";
+  ASSERT_TRUE(parseInt64(negative, a));
+  EXPECT_EQ(a, -std::numeric_limits<int64_t>::max());
 }
 
 TEST(TextScan, Tokens) {
