@@ -7,8 +7,10 @@
 // (B / 1024) and the parametric sort's runs (B / 8). What does not shrink with B: the smallest
 // brick (64K triangles unless --brick-triangles says fewer), the bricking's per-object table and
 // the per-instance records of the parametric searches. Those terms are the input's floor; the
-// process's own code, libraries and thread stacks and the visibility stage's ray-tracing
-// structures (capped by its candidate triangle limit) are the documented constant on top.
+// process's own code, libraries and thread stacks (78 MiB) and the visibility stage's ray-tracing
+// structures (capped by its candidate triangle limit: up to 190 MiB) are the documented constant
+// on top, 272 MiB (docs/preprocess.md, "Memory"). A mesh reader's vertex table takes B / 8 and
+// spills the rest (ReadOptions::vertex_memory_bytes).
 #pragma once
 
 #include <cstdint>

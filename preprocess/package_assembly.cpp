@@ -175,7 +175,7 @@ void addDagPieceToPackage(const ClusterDag& dag, uint32_t first_cluster, uint32_
 DagPlacement addDagToPackage(const ClusterDag& dag, PackageStorage& storage) {
   DagPlacement placement = beginDagPlacement(storage);
   QuantizationSnapper snapper(storage.position_step_m);
-  const SnapPiece whole{dag.clusters, {}, SharedPositions::None};
+  const SnapPiece whole{dag.clusters, {}, SharedPositions::None, {}};
   snapper.solve(0, whole);
   std::vector<uint32_t> shifts;
   const std::vector<std::vector<glm::vec3>> snapped = snapper.snap(0, whole, shifts);

@@ -215,7 +215,7 @@ class PreprocessRun {
   void packMeshClusters();
   void packParametricClusters();
   DagOptions optionsForBrick(uint32_t b) const;
-  SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All}; }
+  SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All, {}}; }
 
   const PreprocessOptions& options_;
   Progress* progress_;

@@ -311,27 +311,27 @@ TEST(PackageAssembly, PiecewiseSnappingEqualsWholeDagSnapping) {
       exported[h].push_back(c.parent_group == tw::kNoGroup);
       if (exported[h].back()) roots.push_back(c);
     }
-    pieces.solve(h, {bricks[h].clusters, exported[h], tw::SharedPositions::SeamsAndRoots});
+    pieces.solve(h, {bricks[h].clusters, exported[h], tw::SharedPositions::SeamsAndRoots, {}});
   }
   tw::MergedRoots merged = tw::mergeBrickRoots(roots, merge_options);
   std::vector<tw::DagCluster> upper(merged.dag.clusters.begin() + merged.front_count,
                                     merged.dag.clusters.end());
   ASSERT_FALSE(upper.empty());
-  pieces.solve(2, {upper, {}, tw::SharedPositions::All});
+  pieces.solve(2, {upper, {}, tw::SharedPositions::All, {}});
   int rounds = 0;
   for (auto stale = pieces.stalePieces(); !stale.empty(); stale = pieces.stalePieces()) {
     ASSERT_LT(++rounds, 40);
     for (uint32_t p : stale)
-      pieces.solve(p, p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All}
+      pieces.solve(p, p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All, {}}
                              : tw::SnapPiece{bricks[p].clusters, exported[p],
-                                             tw::SharedPositions::SeamsAndRoots});
+                                             tw::SharedPositions::SeamsAndRoots, {}});
   }
   std::vector<std::vector<glm::vec3>> piecewise;
   std::vector<uint32_t> piecewise_shifts, shifts;
   for (uint32_t p = 0; p < 3; ++p) {
-    tw::SnapPiece input = p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All}
+    tw::SnapPiece input = p == 2 ? tw::SnapPiece{upper, {}, tw::SharedPositions::All, {}}
                                  : tw::SnapPiece{bricks[p].clusters, exported[p],
-                                                 tw::SharedPositions::SeamsAndRoots};
+                                                 tw::SharedPositions::SeamsAndRoots, {}};
     for (auto& snapped : pieces.snap(p, input, shifts)) piecewise.push_back(std::move(snapped));
     piecewise_shifts.insert(piecewise_shifts.end(), shifts.begin(), shifts.end());
   }
@@ -340,7 +340,7 @@ TEST(PackageAssembly, PiecewiseSnappingEqualsWholeDagSnapping) {
   ClusterDag whole = tw::mergeBrickDags(bricks, merge_options);
   ASSERT_EQ(whole.clusters.size(), piecewise.size());
   tw::QuantizationSnapper at_once(defaultStepM());
-  at_once.solve(0, {whole.clusters, {}, tw::SharedPositions::None});
+  at_once.solve(0, {whole.clusters, {}, tw::SharedPositions::None, {}});
   std::vector<uint32_t> whole_shifts;
   std::vector<std::vector<glm::vec3>> snapped = at_once.snap(0, {whole.clusters, {}, {}}, whole_shifts);
   EXPECT_EQ(piecewise_shifts, whole_shifts);
