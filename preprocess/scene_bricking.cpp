@@ -350,9 +350,13 @@ class BrickingSink : public SceneSink {
     const uint32_t dense = objectIndex(object.info);
     const Transform& t = object.info.transform;
     if (const auto* mesh = std::get_if<TriangleMesh>(&object.geometry)) {
-      queueMesh(PendingMesh{*mesh, {}, t, dense});
+      PendingMesh piece;
+      piece.mesh = *mesh;
+      queueMesh(std::move(piece), t, dense);
     } else if (const auto* nurbs = std::get_if<NurbsPatchSet>(&object.geometry)) {
-      queueMesh(PendingMesh{{}, *nurbs, t, dense});
+      PendingMesh piece;
+      piece.nurbs = *nurbs;
+      queueMesh(std::move(piece), t, dense);
     } else {
       ByteWriter w;
       w.put(dense);
@@ -452,7 +456,9 @@ class BrickingSink : public SceneSink {
   };
   static constexpr uint64_t kPendingTriangles = 1 << 18;
 
-  void queueMesh(PendingMesh piece) {
+  void queueMesh(PendingMesh piece, const Transform& t, uint32_t dense) {
+    piece.t = t;
+    piece.dense = dense;
     pending_triangles_ += piece.mesh.indices.size() / 3 + 1;
     for (const NurbsPatch& patch : piece.nurbs.patches)
       pending_triangles_ += uint64_t(patch.control_points.size()) * 8;
