@@ -342,7 +342,7 @@ TEST(PackageAssembly, PiecewiseSnappingEqualsWholeDagSnapping) {
   tw::QuantizationSnapper at_once(defaultStepM());
   at_once.solve(0, {whole.clusters, {}, tw::SharedPositions::None, {}});
   std::vector<uint32_t> whole_shifts;
-  std::vector<std::vector<glm::vec3>> snapped = at_once.snap(0, {whole.clusters, {}, {}}, whole_shifts);
+  std::vector<std::vector<glm::vec3>> snapped = at_once.snap(0, {whole.clusters, {}, tw::SharedPositions::None, {}}, whole_shifts);
   EXPECT_EQ(piecewise_shifts, whole_shifts);
   EXPECT_EQ(piecewise, snapped);
   EXPECT_EQ(pieces.maxShift(), at_once.maxShift());
