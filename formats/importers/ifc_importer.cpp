@@ -15,6 +15,7 @@
 
 #include "format_error.h"
 #include "profile_prism.h"
+#include "solid_cut.h"
 #include "step21_file.h"
 #include "tessellate.h"
 
@@ -42,7 +43,7 @@ class IfcImporter {
     readUnits();
     readStyles();
     readLayers();
-    voids_ = int(f_.idsOfType("IFCRELVOIDSELEMENT").size());  // not cut (see the header)
+    readOpenings();
     std::vector<uint64_t> ids;
     for (const auto& [id, instance] : f_.instances()) ids.push_back(id);
     std::sort(ids.begin(), ids.end());
@@ -50,29 +51,47 @@ class IfcImporter {
       const Step21Instance& in = *f_.find(id);
       if (!isDrawnIfcProduct(f_, in)) continue;
       ++products_;
-      importProduct(in);
+      importProduct(id, in);
     }
-    if (voids_ > 0)
-      warn(std::to_string(voids_) + " openings (IfcRelVoidsElement) are not cut from their hosts");
-    if (clippings_ > 0)
-      warn(std::to_string(clippings_) + " boolean results keep their first operand only");
+    if (uncut_ > 0)
+      warn(std::to_string(uncut_) + " openings or boolean differences could not be cut and were drawn whole");
+    if (intersections_ > 0)
+      warn(std::to_string(intersections_) + " boolean intersections keep their first operand only");
     if (skipped_warnings_ > kMaxWarnings)
       warn(std::to_string(skipped_warnings_ - kMaxWarnings) + " more items skipped");
   }
 
   uint32_t objects() const { return next_id_; }
   uint32_t products() const { return products_; }
+  uint32_t cuts() const { return cuts_; }
 
  private:
   static constexpr int kMaxWarnings = 20;
 
   void warn(const std::string& message) { readWarning(options_, f_.fileName() + ": " + message); }
   void skipped(uint64_t item, const std::string& product_type, const std::string& reason) {
+    if (++skipped_warnings_ <= kMaxWarnings) warn(itemMessage(item, product_type, reason, "skipped"));
+  }
+  void notCut(uint64_t item, const std::string& what, const std::string& reason) {
+    ++uncut_;
     if (++skipped_warnings_ <= kMaxWarnings)
-      warn("#" + std::to_string(item) + " (in an " + product_type + "): " + reason + "; skipped");
+      warn(itemMessage(item, product_type_, what + " not cut: " + reason, "drawn whole"));
+  }
+  // "#id (in an IFCWALL): reason; outcome", appended piece by piece (GCC 12 warns, wrongly,
+  // about overlapping copies in a chain of operator+).
+  static std::string itemMessage(uint64_t item, const std::string& product_type,
+                                 const std::string& reason, const char* outcome) {
+    std::string m = "#";
+    m += std::to_string(item);
+    m += " (in an ";
+    m += product_type;
+    m += "): ";
+    m += reason;
+    m += "; ";
+    m += outcome;
+    return m;
   }
 
-  // --- Units ---------------------------------------------------------------------------------
   static double siPrefix(const std::string& p) {
     static const std::map<std::string, double> prefixes = {
         {"EXA", 1e18}, {"PETA", 1e15}, {"TERA", 1e12}, {"GIGA", 1e9}, {"MEGA", 1e6},
@@ -221,26 +240,15 @@ class IfcImporter {
     return placement(f_.deref(arg(p, 0)), depth + 1) * axisPlacement(f_.deref(arg(p, 1)));
   }
 
-  void importProduct(const Step21Instance& product) {
+  void importProduct(uint64_t product_id, const Step21Instance& product) {
     ObjectInfo info;
     info.name = textOf(product.args[2]);
     if (info.name.empty()) info.name = product.type;
     info.db_key = product.args[0].text;
     product_type_ = product.type;
     const glm::dmat4 world = placement(f_.deref(product.args[5]), 0);
-
-    // Body representations: 'Body' by identifier, else any with solid or surface items.
-    std::vector<const Step21Instance*> bodies, others;
     const Step21Instance* shape = f_.deref(product.args[6]);
-    for (const Step21Value& r : arg(shape, 2).items) {
-      const Step21Instance* rep = f_.deref(r);
-      if (!rep) continue;
-      const std::string identifier = textOf(arg(rep, 1));
-      if (identifier == "Body") bodies.push_back(rep);
-      else if (identifier.empty() || identifier == "Facetation" || identifier == "Mesh")
-        others.push_back(rep);
-    }
-    if (bodies.empty()) bodies = others;
+    const std::vector<const Step21Instance*> bodies = bodyRepresentations(product);
 
     std::string layer;
     for (const Step21Value& r : arg(shape, 2).items)
@@ -258,6 +266,7 @@ class IfcImporter {
             layer = it->second;
         if (item.kind == Kind::Ref) importItem(item.ref, glm::dmat4(1.0), 0);
       }
+    cutOpenings(product_id, world);
     if (!options_.cad_primitives) meshPrimitives();
     if (mesh_.indices.empty() && primitives_.empty()) return;
 
@@ -277,16 +286,123 @@ class IfcImporter {
     }
   }
 
+  // A product's body representations: 'Body' by identifier, else any with solid or surface
+  // items.
+  std::vector<const Step21Instance*> bodyRepresentations(const Step21Instance& product) const {
+    std::vector<const Step21Instance*> bodies, others;
+    const Step21Instance* shape = f_.deref(product.args[6]);
+    for (const Step21Value& r : arg(shape, 2).items) {
+      const Step21Instance* rep = f_.deref(r);
+      if (!rep) continue;
+      const std::string identifier = textOf(arg(rep, 1));
+      if (identifier == "Body") bodies.push_back(rep);
+      else if (identifier.empty() || identifier == "Facetation" || identifier == "Mesh")
+        others.push_back(rep);
+    }
+    return bodies.empty() ? others : bodies;
+  }
+
+  // --- Cuts ----------------------------------------------------------------------------------
+  // IfcRelVoidsElement: RelatingBuildingElement (4) is voided by RelatedOpeningElement (5).
+  void readOpenings() {
+    for (uint64_t id : f_.idsOfType("IFCRELVOIDSELEMENT")) {
+      const Step21Instance* rel = f_.find(id);
+      const Step21Value& host = arg(rel, 4);
+      const Step21Value& opening = arg(rel, 5);
+      if (host.kind == Kind::Ref && opening.kind == Kind::Ref) openings_of_[host.ref].push_back(opening.ref);
+    }
+  }
+
+  // What `import` adds to the product's geometry, taken apart from it.
+  template <typename Import>
+  SolidSet collectSolids(Import&& import) {
+    TriangleMesh saved_mesh = std::move(mesh_);
+    auto saved_primitives = std::move(primitives_);
+    const uint32_t saved_colour = colour_;
+    mesh_ = TriangleMesh{};
+    primitives_.clear();
+    import();
+    SolidSet out{std::move(mesh_), std::move(primitives_)};
+    mesh_ = std::move(saved_mesh);
+    primitives_ = std::move(saved_primitives);
+    colour_ = saved_colour;
+    return out;
+  }
+
+  // Adds `set` to the product's geometry as it is.
+  void keep(SolidSet set) {
+    appendMesh(set.mesh, glm::dmat4(1.0));
+    for (auto& placed : set.primitives) primitives_.push_back(std::move(placed));
+  }
+  void appendMesh(const TriangleMesh& part, const glm::dmat4& at) {
+    const uint32_t base = uint32_t(mesh_.positions.size());
+    for (const glm::vec3& p : part.positions) mesh_.positions.push_back(glm::vec3(at * glm::dvec4(glm::dvec3(p), 1.0)));
+    for (uint32_t i : part.indices) mesh_.indices.push_back(base + i);
+  }
+
+  // `first` less `tools` and `half_spaces`, added to the product's geometry; `first` whole, with
+  // a warning naming `item`, when the cut fails.
+  void subtractInto(SolidSet first, const SolidSet& tools, const std::vector<HalfSpace>& half_spaces,
+                    uint64_t item, const std::string& what) {
+    try {
+      appendMesh(subtractSolids(first, tools, half_spaces, kDefaultChordalTolerance), glm::dmat4(1.0));
+      ++cuts_;
+    } catch (const SolidCutError& e) {
+      notCut(item, what, e.what());
+      keep(std::move(first));
+    }
+  }
+
+  // The openings that void `product` (windows, doors, recesses), cut from all of its geometry.
+  void cutOpenings(uint64_t product_id, const glm::dmat4& world) {
+    const auto it = openings_of_.find(product_id);
+    if (it == openings_of_.end() || (mesh_.indices.empty() && primitives_.empty())) return;
+    const glm::dmat4 to_product = glm::inverse(world);
+    SolidSet openings = collectSolids([&] {
+      for (uint64_t id : it->second) {
+        const Step21Instance* opening = f_.find(id);
+        if (!opening || opening->args.size() < 7) continue;
+        const glm::dmat4 at = to_product * placement(f_.deref(opening->args[5]), 0);
+        for (const Step21Instance* rep : bodyRepresentations(*opening))
+          for (const Step21Value& item : arg(rep, 3).items)
+            if (item.kind == Kind::Ref) importItem(item.ref, at, 0);
+      }
+    });
+    if (openings.empty()) return;
+    SolidSet host = collectSolids([] {});
+    std::swap(host.mesh, mesh_);
+    std::swap(host.primitives, primitives_);
+    subtractInto(std::move(host), openings, {}, product_id,
+                 std::to_string(it->second.size()) + (it->second.size() == 1 ? " opening" : " openings") +
+                     " (IfcRelVoidsElement)");
+  }
+
+  // IfcHalfSpaceSolid, IfcBoxedHalfSpace (its enclosure only speeds up a cut: ignored) and
+  // IfcPolygonalBoundedHalfSpace, placed by `local`.
+  std::optional<HalfSpace> halfSpace(const Step21Instance& in, const glm::dmat4& local) const {
+    if (in.type != "IFCHALFSPACESOLID" && in.type != "IFCBOXEDHALFSPACE" &&
+        in.type != "IFCPOLYGONALBOUNDEDHALFSPACE")
+      return std::nullopt;
+    const Step21Instance* surface = f_.deref(arg(&in, 0));
+    if (!surface || surface->type != "IFCPLANE") throw ItemError{"a half-space not bounded by a plane"};
+    HalfSpace h;
+    h.plane = local * axisPlacement(f_.deref(arg(surface, 0)));
+    // AgreementFlag true: the plane's normal points away from the material.
+    h.material_below = textOf(arg(&in, 1)) != "F";
+    if (in.type == "IFCPOLYGONALBOUNDEDHALFSPACE") {
+      h.boundary_frame = local * axisPlacement(f_.deref(arg(&in, 2)));
+      h.boundary = curvePoints(f_.deref(arg(&in, 3)));
+    }
+    return h;
+  }
+
   // ReadOptions::cad_primitives off: the primitives become triangles of the product's mesh, at
   // the scene's default chordal tolerance (what the preprocessor would tessellate them at).
   void meshPrimitives() {
     for (const auto& [local, primitive] : primitives_) {
       TriangleMesh part;
       tessellatePrimitive(primitive, kDefaultChordalTolerance, part);
-      const uint32_t base = uint32_t(mesh_.positions.size());
-      for (const glm::vec3& p : part.positions)
-        mesh_.positions.push_back(glm::vec3(local * glm::dvec4(glm::dvec3(p), 1.0)));
-      for (uint32_t i : part.indices) mesh_.indices.push_back(base + i);
+      appendMesh(part, local);
     }
     primitives_.clear();
   }
@@ -315,10 +431,10 @@ class IfcImporter {
       else if (t == "IFCPOLYGONALFACESET") polygonalFaceSet(*item, local);
       else if (t == "IFCTRIANGULATEDFACESET") triangulatedFaceSet(*item, local);
       else if (t == "IFCMAPPEDITEM") mapped(*item, local, depth);
-      else if (t == "IFCBOOLEANCLIPPINGRESULT" || t == "IFCBOOLEANRESULT") boolean(*item, local, depth);
-      else if (t == "IFCCSGSOLID") csgPrimitive(f_.deref(arg(item, 0)), local, depth);
+      else if (t == "IFCBOOLEANCLIPPINGRESULT" || t == "IFCBOOLEANRESULT") boolean(id, *item, local, depth);
+      else if (t == "IFCCSGSOLID") csgPrimitive(id, f_.deref(arg(item, 0)), local, depth);
       else if (t == "IFCBLOCK" || t == "IFCRIGHTCIRCULARCYLINDER" || t == "IFCSPHERE")
-        csgPrimitive(item, local, depth);
+        csgPrimitive(id, item, local, depth);
       else if (t == "IFCSWEPTDISKSOLID") sweptDisk(*item, local);
       else throw ItemError{"geometry " + t + " is not read"};
     } catch (const ItemError& e) {
@@ -349,18 +465,44 @@ class IfcImporter {
       if (sub.kind == Kind::Ref) importItem(sub.ref, to, depth + 1);
   }
 
-  void boolean(const Step21Instance& item, const glm::dmat4& local, int depth) {
+  // UNION: both operands; DIFFERENCE (IfcBooleanClippingResult is one): the second cut from the
+  // first; INTERSECTION: the first only, counted in a warning.
+  void boolean(uint64_t id, const Step21Instance& item, const glm::dmat4& local, int depth) {
     const std::string op = textOf(arg(&item, 0));
-    if (op != "UNION") ++clippings_;
-    for (size_t i = 1; i <= (op == "UNION" ? 2u : 1u); ++i) {
-      const Step21Value& operand = arg(&item, i);
-      if (operand.kind == Kind::Ref) importItem(operand.ref, local, depth + 1);
+    auto operand = [&](size_t i) {
+      const Step21Value& v = arg(&item, i);
+      if (v.kind == Kind::Ref) importItem(v.ref, local, depth + 1);
+    };
+    if (op == "UNION") {
+      operand(1);
+      operand(2);
+      return;
     }
+    if (op != "DIFFERENCE") {
+      ++intersections_;
+      operand(1);
+      return;
+    }
+    SolidSet first = collectSolids([&] { operand(1); });
+    if (first.empty()) return;
+    std::vector<HalfSpace> half_spaces;
+    SolidSet tools;
+    try {
+      const Step21Instance* second = f_.deref(arg(&item, 2));
+      if (!second) throw ItemError{"a boolean difference without a second operand"};
+      if (auto h = halfSpace(*second, local)) half_spaces.push_back(*h);
+      else tools = collectSolids([&] { operand(2); });
+    } catch (const ItemError& e) {
+      notCut(id, "a boolean difference", e.reason);
+      keep(std::move(first));
+      return;
+    }
+    subtractInto(std::move(first), tools, half_spaces, id, "a boolean difference");
   }
 
-  void csgPrimitive(const Step21Instance* in, const glm::dmat4& local, int depth) {
+  void csgPrimitive(uint64_t id, const Step21Instance* in, const glm::dmat4& local, int depth) {
     if (!in) throw ItemError{"CSG solid without a tree"};
-    if (in->type == "IFCBOOLEANRESULT") return boolean(*in, local, depth);
+    if (in->type == "IFCBOOLEANRESULT") return boolean(id, *in, local, depth);
     const glm::dmat4 at = local * axisPlacement(f_.deref(arg(in, 0)));
     if (in->type == "IFCBLOCK") {  // its position is a corner
       const glm::dvec3 size(numberOf(arg(in, 1), 0) * length_, numberOf(arg(in, 2), 0) * length_,
@@ -547,10 +689,7 @@ class IfcImporter {
       TriangleMesh prism;
       if (appendProfilePrism(outer, holes, dir * depth, prism) == 0)
         throw ItemError{"a profile that does not triangulate"};
-      const uint32_t base = uint32_t(mesh_.positions.size());
-      for (const glm::vec3& p : prism.positions)
-        mesh_.positions.push_back(glm::vec3(at * glm::dvec4(glm::dvec3(p), 1.0)));
-      for (uint32_t i : prism.indices) mesh_.indices.push_back(base + i);
+      appendMesh(prism, at);
       return;
     }
     const glm::dmat4 plane = at * axisPlacement(f_.deref(arg(profile, 2)));
@@ -634,7 +773,10 @@ class IfcImporter {
   // Appends a planar polygon, triangulated in its best-fitting plane: projected along its
   // normal's largest axis, wound so its own winding is counter-clockwise there, so the
   // triangles keep the face's orientation.
-  void polygon(const std::vector<glm::dvec3>& pts, const glm::dmat4& local) {
+  // A planar face with its holes, triangulated in the plane it faces (holes bridged into the
+  // outer loop, profile_prism.h).
+  void polygon(const std::vector<glm::dvec3>& pts, const std::vector<std::vector<glm::dvec3>>& holes,
+               const glm::dmat4& local) {
     const size_t n = pts.size();
     if (n < 3) return;
     glm::dvec3 normal(0.0);
@@ -645,11 +787,20 @@ class IfcImporter {
                          : (std::abs(normal.y) > std::abs(normal.z) ? 1 : 2);
     const int ax = (drop + 1) % 3, ay = (drop + 2) % 3;
     const double sign = normal[drop] > 0 ? 1.0 : -1.0;
-    std::vector<glm::dvec2> p2(n);
-    for (size_t i = 0; i < n; ++i) p2[i] = glm::dvec2(pts[i][ax], pts[i][ay] * sign);
+    auto projected = [&](const std::vector<glm::dvec3>& loop) {
+      std::vector<glm::dvec2> out;
+      for (const glm::dvec3& p : loop) out.push_back(glm::dvec2(p[ax], p[ay] * sign));
+      return out;
+    };
+    std::vector<std::vector<glm::dvec2>> holes2;
+    for (const auto& hole : holes) holes2.push_back(projected(hole));
     const uint32_t base = uint32_t(mesh_.positions.size());
-    for (const glm::dvec3& p : pts) mesh_.positions.push_back(glm::vec3(local * glm::dvec4(p, 1.0)));
-    for (uint32_t i : triangulateProfile(p2, {})) mesh_.indices.push_back(base + i);
+    auto place = [&](const std::vector<glm::dvec3>& loop) {
+      for (const glm::dvec3& p : loop) mesh_.positions.push_back(glm::vec3(local * glm::dvec4(p, 1.0)));
+    };
+    place(pts);
+    for (const auto& hole : holes) place(hole);
+    for (uint32_t i : triangulateProfile(projected(pts), holes2)) mesh_.indices.push_back(base + i);
   }
 
   void shell(const Step21Instance* s, const glm::dmat4& local) {
@@ -657,21 +808,26 @@ class IfcImporter {
     for (const Step21Value& fv : arg(s, 0).items) {
       const Step21Instance* face = f_.deref(fv);
       if (!face) continue;
+      // The outer bound (IfcFaceOuterBound, else the first) and the holes (the other bounds).
+      std::vector<glm::dvec3> outer;
+      std::vector<std::vector<glm::dvec3>> holes;
       const auto& bounds = arg(face, 0).items;
-      for (const Step21Value& bv : bounds) {
-        const Step21Instance* bound = f_.deref(bv);
+      size_t outer_at = 0;
+      for (size_t b = 0; b < bounds.size(); ++b)
+        if (const Step21Instance* bound = f_.deref(bounds[b]); bound && bound->type == "IFCFACEOUTERBOUND")
+          outer_at = b;
+      for (size_t b = 0; b < bounds.size(); ++b) {
+        const Step21Instance* bound = f_.deref(bounds[b]);
         if (!bound) continue;
-        if (bound->type == "IFCFACEBOUND" && bounds.size() > 1) {
-          if (++face_holes_ == 1) warn("holes in faceted faces (IfcFaceBound) are filled");
-          continue;
-        }
         const Step21Instance* loop = f_.deref(arg(bound, 0));
         if (!loop || loop->type != "IFCPOLYLOOP") continue;
         std::vector<glm::dvec3> pts;
         for (const Step21Value& p : arg(loop, 0).items) pts.push_back(point(f_.deref(p)));
         if (textOf(arg(bound, 1)) == "F") std::reverse(pts.begin(), pts.end());
-        polygon(pts, local);
+        if (b == outer_at) outer = std::move(pts);
+        else holes.push_back(std::move(pts));
       }
+      polygon(outer, holes, local);
     }
   }
 
@@ -704,13 +860,20 @@ class IfcImporter {
     for (const Step21Value& fv : arg(&item, 2).items) {
       const Step21Instance* face = f_.deref(fv);
       if (!face) continue;
-      std::vector<glm::dvec3> polygon_pts;
-      for (const Step21Value& iv : arg(face, 0).items) {
-        const auto i = coordinate(numberOf(iv, 0), pn, pts.size());
-        if (!i) throw ItemError{"a face index outside the coordinates"};
-        polygon_pts.push_back(pts[*i]);
-      }
-      polygon(polygon_pts, local);
+      auto loopOf = [&](const Step21Value& indices) {
+        std::vector<glm::dvec3> loop;
+        for (const Step21Value& iv : indices.items) {
+          const auto i = coordinate(numberOf(iv, 0), pn, pts.size());
+          if (!i) throw ItemError{"a face index outside the coordinates"};
+          loop.push_back(pts[*i]);
+        }
+        return loop;
+      };
+      // IfcIndexedPolygonalFaceWithVoids lists its holes' indices second.
+      std::vector<std::vector<glm::dvec3>> holes;
+      if (face->type == "IFCINDEXEDPOLYGONALFACEWITHVOIDS")
+        for (const Step21Value& inner : arg(face, 1).items) holes.push_back(loopOf(inner));
+      polygon(loopOf(arg(face, 0)), holes, local);
     }
   }
 
@@ -741,7 +904,9 @@ class IfcImporter {
   std::unordered_map<uint64_t, std::string> layer_of_;
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;
-  int voids_ = 0, clippings_ = 0, skipped_warnings_ = 0, profile_voids_ = 0, face_holes_ = 0;
+  int intersections_ = 0, uncut_ = 0, skipped_warnings_ = 0, profile_voids_ = 0;
+  uint32_t cuts_ = 0;
+  std::unordered_map<uint64_t, std::vector<uint64_t>> openings_of_;  // host -> opening products
   // The product being imported.
   std::string product_type_;
   TriangleMesh mesh_;

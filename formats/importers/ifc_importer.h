@@ -17,10 +17,14 @@
 // - name: the product's Name (else its class); database key: its GlobalId; layer: the
 //   IfcPresentationLayerAssignment of its representation or items, else its IFC class;
 //   colour: the IfcStyledItem surface colour of its first styled item.
-// Not done: openings are not cut from their walls (IfcRelVoidsElement) and boolean clippings
-// keep their first operand (each counted in one warning); arcs of indexed polycurves and other
-// profile types are skipped with a warning naming the #id. Property sets go to the project
-// database (ifc_properties.h).
+// - openings (IfcRelVoidsElement) are cut from the product they void, and boolean differences
+//   (IfcBooleanResult, IfcBooleanClippingResult, half-spaces included) are cut from their first
+//   operand, by OpenCASCADE (solid_cut.h); the product is then one mesh; a cut that fails
+//   keeps the uncut geometry with a warning naming the #id;
+// - faces with holes keep their holes.
+// Not done: boolean intersections keep their first operand (counted in one warning); arcs of
+// indexed polycurves and other profile types are skipped with a warning naming the #id.
+// Property sets go to the project database (ifc_properties.h).
 //
 // Bad input: text that is not Part 21 is a FormatError naming the file and line; an item whose
 // geometry fails (a missing reference, a degenerate profile) is skipped with a warning naming
