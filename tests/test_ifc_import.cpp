@@ -10,6 +10,7 @@
 #include "format_error.h"
 #include "ifc_importer.h"
 #include "profile_prism.h"
+#include "steel_profiles.h"
 #include "step21_file.h"
 #include "tessellate.h"
 #include "test_support.h"
@@ -404,6 +405,57 @@ TEST(ProfilePrism, HolesAreCutAndThePrismIsClosed) {
       EXPECT_EQ(directed.count({edge.second, edge.first}), 1u) << edge.first << "-" << edge.second;
     }
   }
+}
+
+// Each steel section: counter-clockwise, centred on its bounding box, of the area its
+// dimensions give, and as wide and deep as they say.
+TEST(SteelProfiles, OutlinesHaveTheAreaAndBoxOfTheirDimensions) {
+  struct Case {
+    SteelSection section;
+    std::vector<double> dimensions;
+    double area, width, depth;
+  };
+  const std::vector<Case> cases = {
+      {SteelSection::I, {0.2, 0.4, 0.01, 0.02}, 2 * 0.2 * 0.02 + 0.36 * 0.01, 0.2, 0.4},
+      {SteelSection::L, {0.1, 0.08, 0.01}, 0.1 * 0.01 + 0.07 * 0.01, 0.08, 0.1},
+      {SteelSection::L, {0.1, std::nan(""), 0.01}, 0.1 * 0.01 + 0.09 * 0.01, 0.1, 0.1},
+      {SteelSection::T, {0.3, 0.2, 0.01, 0.02}, 0.2 * 0.02 + 0.28 * 0.01, 0.2, 0.3},
+      {SteelSection::U, {0.3, 0.1, 0.01, 0.02}, 2 * 0.1 * 0.02 + 0.26 * 0.01, 0.1, 0.3},
+      {SteelSection::C, {0.2, 0.08, 0.002, 0.02}, 0.2 * 0.002 + 2 * 0.078 * 0.002 + 2 * 0.018 * 0.002, 0.08, 0.2},
+      {SteelSection::Z, {0.3, 0.1, 0.01, 0.02}, 2 * 0.1 * 0.02 + 0.26 * 0.01, 0.19, 0.3},
+  };
+  for (const Case& c : cases) {
+    const std::vector<glm::dvec2> outline = steelSectionOutline(c.section, c.dimensions);
+    EXPECT_NEAR(0.5 * loopArea2(outline), c.area, 1e-12) << int(c.section);
+    glm::dvec2 lo(1e9), hi(-1e9);
+    for (const glm::dvec2& p : outline) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    EXPECT_NEAR(hi.x - lo.x, c.width, 1e-12) << int(c.section);
+    EXPECT_NEAR(hi.y - lo.y, c.depth, 1e-12) << int(c.section);
+    EXPECT_NEAR(lo.x + hi.x, 0.0, 1e-12) << int(c.section);
+    EXPECT_NEAR(lo.y + hi.y, 0.0, 1e-12) << int(c.section);
+  }
+  EXPECT_THROW(steelSectionOutline(SteelSection::I, {0.2, 0.4, 0.3, 0.02}), SteelSectionError);
+  EXPECT_THROW(steelSectionOutline(SteelSection::U, {0.3, 0.1}), SteelSectionError);
+  EXPECT_EQ(steelSectionOf("IFCZSHAPEPROFILEDEF"), SteelSection::Z);
+  EXPECT_FALSE(steelSectionOf("IFCRECTANGLEPROFILEDEF"));
+}
+
+// A beam extruded from an IfcIShapeProfileDef stays parametric: an extrusion of the I.
+TEST(IfcImport, SteelSectionsAreExtrusionsOfTheirOutline) {
+  std::vector<std::string> warnings;
+  const test::CollectingSink sink = importText(
+      wallIfc("#95", "#96=IFCISHAPEPROFILEDEF(.AREA.,'IPE400',#6,0.18,0.4,0.0086,0.0135,0.021,$,$);\n"
+                     "#95=IFCEXTRUDEDAREASOLID(#96,#4,#7,6.);\n"),
+      &warnings);
+  for (const std::string& w : warnings)
+    EXPECT_EQ(w.find("skipped"), std::string::npos) << w;
+  ASSERT_EQ(sink.objects.size(), 1u);
+  const auto* e = std::get_if<Extrusion>(&std::get<Primitive>(sink.objects[0].geometry));
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->profile.size(), 12u);
+  EXPECT_FLOAT_EQ(e->height, 6.0f);
+  std::vector<glm::dvec2> outline(e->profile.begin(), e->profile.end());
+  EXPECT_NEAR(0.5 * loopArea2(outline), 2 * 0.18 * 0.0135 + (0.4 - 2 * 0.0135) * 0.0086, 1e-6);
 }
 
 // A placement chain that loops is followed to a bounded depth, not forever.

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <optional>
@@ -16,6 +17,7 @@
 #include "format_error.h"
 #include "profile_prism.h"
 #include "solid_cut.h"
+#include "steel_profiles.h"
 #include "step21_file.h"
 #include "tessellate.h"
 
@@ -661,12 +663,27 @@ class IfcImporter {
         circle.push_back(r * glm::dvec2(std::cos(a), std::sin(a)));
       }
       outer = placed(circle);
+    } else if (const auto section = steelSectionOf(t)) {
+      outer = placed(steelOutline(*section, *profile));
     } else if (t == "IFCARBITRARYCLOSEDPROFILEDEF" || t == "IFCARBITRARYPROFILEDEFWITHVOIDS") {
       outer = curvePoints(f_.deref(arg(profile, 2)));
       if (t == "IFCARBITRARYPROFILEDEFWITHVOIDS")
         for (const Step21Value& inner : arg(profile, 3).items) holes.push_back(curvePoints(f_.deref(inner)));
     } else {
       throw ItemError{"profile " + t + " is not read"};
+    }
+  }
+
+  // A steel section's outline in its profile's plane (before the profile's own placement): its
+  // dimensions follow ProfileType, ProfileName and Position.
+  std::vector<glm::dvec2> steelOutline(SteelSection section, const Step21Instance& profile) const {
+    std::vector<double> dimensions;
+    for (size_t i = 3; i < profile.args.size(); ++i)
+      dimensions.push_back(numberOf(profile.args[i], std::numeric_limits<double>::quiet_NaN()) * length_);
+    try {
+      return steelSectionOutline(section, dimensions);
+    } catch (const SteelSectionError& e) {
+      throw ItemError{"profile " + profile.type + ": " + e.what()};
     }
   }
 
@@ -703,6 +720,14 @@ class IfcImporter {
       const double r = numberOf(arg(profile, 3), 0) * length_;
       if (!(r > 0)) throw ItemError{"a circle without radius"};
       add(plane, Cylinder{float(r), float(depth), true});
+    } else if (steelSectionOf(t)) {
+      std::vector<glm::dvec2> outer;
+      std::vector<std::vector<glm::dvec2>> holes;
+      profileLoops(profile, outer, holes);
+      Extrusion e;
+      for (const glm::dvec2& p : outer) e.profile.push_back(glm::vec2(p));
+      e.height = float(depth);
+      add(at, std::move(e));
     } else if (t == "IFCARBITRARYCLOSEDPROFILEDEF" || t == "IFCARBITRARYPROFILEDEFWITHVOIDS") {
       Extrusion e;
       for (const glm::dvec2& p : curvePoints(f_.deref(arg(profile, 2)))) e.profile.push_back(glm::vec2(p));

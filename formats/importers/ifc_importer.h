@@ -8,7 +8,8 @@
 //   primitive items as objects of their own with the same name and database key:
 //   - an extruded rectangle is a box; an extruded circle or hollow circle is a cylinder (a pipe,
 //     drawn by its outer wall); an extruded polyline is an extrusion of that profile; a revolved
-//     circle is a torus segment (a bend); a revolved polyline is a revolution; CSG blocks,
+//     circle is a torus segment (a bend); a revolved polyline is a revolution; a steel section
+//     (I, L, T, U, C, Z: steel_profiles.h) is an extrusion of its outline; CSG blocks,
 //     cylinders and spheres are boxes, cylinders and spheres; a swept disk along a polyline is a
 //     cylinder per segment;
 //   - an extrusion of a profile with voids, or along an oblique direction, is a closed mesh
