@@ -2,6 +2,10 @@
 #include "preprocess_driver.h"
 
 #include <sys/resource.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 
 #include <algorithm>
 #include <chrono>
@@ -242,8 +246,29 @@ class PreprocessRun {
   double snap_in_build_ = 0.0, snap_in_pack_ = 0.0;  // reported as a stage of its own
 };
 
+// The package's path, checked before anything is read: a run of hours must not fail at its final
+// rename, nor write over one of its own inputs.
+void validateOutput(const PreprocessOptions& options) {
+  namespace fs = std::filesystem;
+  const fs::path& out = options.output;
+  if (out.empty()) throw std::invalid_argument("preprocess: the output path (-o) is empty");
+  std::error_code ec;
+  if (fs::is_directory(out, ec))
+    throw std::invalid_argument(out.string() + ": is a directory; -o names the package file to write");
+  for (const fs::path& input : options.inputs)
+    if (fs::exists(out, ec) && fs::equivalent(out, input, ec))
+      throw std::invalid_argument(out.string() + ": is also an input; writing the package there would destroy it");
+  const fs::path folder = out.has_parent_path() ? out.parent_path() : fs::path(".");
+  if (!fs::is_directory(folder, ec))
+    throw std::invalid_argument(out.string() + ": the folder " + folder.string() + " does not exist");
+  if (::access(folder.c_str(), W_OK | X_OK) != 0)
+    throw std::invalid_argument(out.string() + ": the folder " + folder.string() +
+                                " is not writable: " + std::strerror(errno));
+}
+
 void validateOptions(const PreprocessOptions& options) {
   if (options.inputs.empty()) throw std::invalid_argument("no input files");
+  validateOutput(options);
   if (options.parametric_cluster_size < 1 || options.parametric_cluster_size > 65536)
     throw std::invalid_argument("preprocess: parametric cluster size must be 1..65536");
   if (options.cluster_size < 64 || options.cluster_size > 4096)

@@ -666,6 +666,51 @@ TEST(Cli, RenderWalksBetweenRecordedFrames) {
   EXPECT_NE(negative.output.find("--walk-fps"), std::string::npos) << negative.output;
 }
 
+// Values that would hang the run (a walk of a billion steps a frame), wrap (a width past 32
+// bits read as 1) or take gigabytes (16384x16384) are refused at once, naming the option.
+TEST(Cli, RenderRefusesOptionValuesThatWouldHangWrapOrFillMemory) {
+  auto package = bunnyPackageForCli();
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {"--walk-fps 1e9", "--walk-fps 1e+09: must be 0 to 1000 times --fps (30)"},
+      {"--fps inf", "--fps inf: must be above 0"},
+      {"--size 4294967297x1", "got '4294967297x1': each side must be 1 to 16384 pixels"},
+      {"--size 16384x16384", "got '16384x16384': at most 33554432 pixels"},
+      {"--size 64x48junk", "got '64x48junk'"},
+      {"--tau nan", "--tau nan: must be above 0"},
+      {"--tau -1", "--tau -1: must be above 0"},
+      {"--max-frames 0", "--max-frames"},
+  };
+  for (const auto& [option, message] : refused) {
+    const std::string size = option.rfind("--size", 0) == 0 ? "" : "--size 32x32 ";
+    RunResult r = run("render --quiet " + package.string() + " --orbit 2 " + size + option);
+    EXPECT_NE(r.exit_code, 0) << option;
+    EXPECT_NE(r.output.find(message), std::string::npos) << option << ": " << r.output;
+    EXPECT_LT(r.output.size(), 400u) << option << ": one short line";
+  }
+}
+
+// The package's path is checked before any input is read: an input given as the output is left
+// as it was, and a folder, an empty path or a missing folder fail at once with the path named.
+TEST(Cli, PreprocessRefusesAnOutputItCannotWriteBeforeReadingAnything) {
+  auto dir = test::scratchDir();
+  const auto scene = dir / "s.tws";
+  ASSERT_EQ(run("gen plant --quiet --triangles 20K --no-db -o " + scene.string()).exit_code, 0);
+  const std::string before = test::readFile(scene);
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {scene.string(), scene.string() + ": is also an input; writing the package there would destroy it"},
+      {dir.string(), dir.string() + ": is a directory"},
+      {"''", "the output path (-o) is empty"},
+      {(dir / "missing" / "p.twk").string(), "the folder " + (dir / "missing").string() + " does not exist"},
+  };
+  for (const auto& [output, message] : refused) {
+    RunResult r = run("preprocess --quiet " + scene.string() + " -o " + output);
+    EXPECT_NE(r.exit_code, 0) << output;
+    EXPECT_NE(r.output.find(message), std::string::npos) << output << ": " << r.output;
+  }
+  EXPECT_EQ(test::readFile(scene), before) << "the input is untouched";
+  EXPECT_FALSE(std::filesystem::exists(dir / "s.tws.work"));
+}
+
 TEST(Cli, RenderRejectsABadPathFileNamingTheLine) {
   auto package = bunnyPackageForCli();
   auto dir = test::scratchDir();

@@ -2,6 +2,7 @@
 #include "command_args.h"
 
 #include <cctype>
+#include <charconv>
 #include <cstdio>
 #include <stdexcept>
 
@@ -31,16 +32,26 @@ uint64_t parseByteSize(const std::string& text, const std::string& option) {
 }
 
 void parseImageSize(const std::string& text, const std::string& option, int& width, int& height) {
-  int w = 0, h = 0;
-  char tail = 0;
-  if (std::sscanf(text.c_str(), "%dx%d%c", &w, &h, &tail) != 2 || w < 1 || h < 1 || w > 16384 ||
-      h > 16384) {
+  auto fail = [&](const std::string& why) {
     std::string message = option;
     message.append(": expected WIDTHxHEIGHT such as 1280x720, got '").append(text).append("'");
+    if (!why.empty()) message.append(": ").append(why);
     throw std::runtime_error(message);
-  }
-  width = w;
-  height = h;
+  };
+  // Whole decimal numbers only: from_chars reports overflow instead of wrapping.
+  const char* begin = text.data();
+  const char* end = begin + text.size();
+  uint64_t w = 0, h = 0;
+  auto [after_w, w_error] = std::from_chars(begin, end, w);
+  if (w_error != std::errc() || after_w == end || *after_w != 'x') fail("");
+  auto [after_h, h_error] = std::from_chars(after_w + 1, end, h);
+  if (h_error != std::errc() || after_h != end) fail("");
+  if (w < 1 || h < 1 || w > uint64_t(kMaxImageSide) || h > uint64_t(kMaxImageSide))
+    fail("each side must be 1 to " + std::to_string(kMaxImageSide) + " pixels");
+  if (w * h > kMaxImagePixels)
+    fail("at most " + std::to_string(kMaxImagePixels) + " pixels (8192x4096) are rendered");
+  width = int(w);
+  height = int(h);
 }
 
 }  // namespace tw

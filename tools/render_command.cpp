@@ -89,9 +89,32 @@ double msSince(Clock::time_point start) {
   return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
 }
 
+// Limits that keep a typo from hanging the run or filling the disk: frames are sampled at most
+// kMaxFps a path second, and at most kMaxWalkSteps unrecorded frames lie between two recorded ones.
+constexpr double kMaxFps = 1000.0;
+constexpr double kMaxWalkSteps = 1000.0;
+constexpr double kMaxTauPx = 1e4;
+
 void validateArgs(const RenderArgs& args) {
-  if (!(args.fps > 0.0)) throw std::runtime_error("--fps must be positive");
-  if (!(args.walk_fps >= 0.0)) throw std::runtime_error("--walk-fps must not be negative");
+  auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", v);
+    return std::string(text);
+  };
+  if (!(args.fps > 0.0 && args.fps <= kMaxFps))
+    throw std::runtime_error("--fps " + number(args.fps) + ": must be above 0 and at most " + number(kMaxFps));
+  if (!(args.walk_fps >= 0.0 && args.walk_fps / args.fps <= kMaxWalkSteps))
+    throw std::runtime_error("--walk-fps " + number(args.walk_fps) + ": must be 0 to " +
+                             number(kMaxWalkSteps) + " times --fps (" + number(args.fps) + ")");
+  if (!(args.tau_px > 0.0 && args.tau_px <= kMaxTauPx))
+    throw std::runtime_error("--tau " + number(args.tau_px) + ": must be above 0 and at most " +
+                             number(kMaxTauPx) + " pixels");
+  if (!(args.min_feature_px >= 0.0 && args.min_feature_px <= kMaxTauPx))
+    throw std::runtime_error("--min-feature-px " + number(args.min_feature_px) + ": must be 0 to " +
+                             number(kMaxTauPx) + " pixels");
+  if (!(args.target_fps >= 0.0 && args.target_fps <= kMaxFps))
+    throw std::runtime_error("--target-fps " + number(args.target_fps) + ": must be 0 (off) to " +
+                             number(kMaxFps));
   const int path_sources =
       int(!args.path_file.empty()) + int(args.orbit_frames > 0) + int(args.flythrough_frames > 0);
   if (path_sources != 1)
@@ -424,7 +447,8 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
                   "Also render the path between recorded frames at this rate, without recording "
                   "them (rounded to a whole number of steps per frame): paging and occlusion see "
                   "the camera move as in an interactive walkthrough");
-  cmd->add_option("--max-frames", args->max_frames, "Stop after this many recorded frames");
+  cmd->add_option("--max-frames", args->max_frames, "Stop after this many recorded frames")
+      ->check(CLI::Range(1, 1000000000));
   cmd->add_option("--tau", args->tau_px, "Screen-space error threshold, pixels")
       ->capture_default_str();
   cmd->add_option("--min-feature-px", args->min_feature_px,
