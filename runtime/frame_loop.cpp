@@ -477,6 +477,7 @@ void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) 
   stats.pages_requested = pager_stats.pages_requested;
   stats.pages_loaded = pager_stats.pages_uploaded;
   stats.pages_evicted = pager_stats.pages_evicted;
+  stats.page_load_errors = pager_stats.load_errors;
   stats.gpu_bytes_used = pager_stats.gpu_bytes_used;
   stats.host_bytes_used = pager_stats.host_bytes_used;
   stats.rss_bytes = currentRssBytes();

@@ -50,6 +50,7 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("pages_evicted", s.pages_evicted);
   visit("bytes_uploaded", s.bytes_uploaded);
   visit("ancestor_fallbacks", s.ancestor_fallbacks);
+  visit("page_load_errors", s.page_load_errors);
   visit("gpu_bytes_used", s.gpu_bytes_used);
   visit("host_bytes_used", s.host_bytes_used);
   visit("rss_bytes", s.rss_bytes);

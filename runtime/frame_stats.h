@@ -48,6 +48,8 @@ struct FrameStats {
   uint32_t pages_evicted = 0;
   uint64_t bytes_uploaded = 0;
   uint32_t ancestor_fallbacks = 0;  // groups drawn coarser because pages were missing
+  uint64_t page_load_errors = 0;    // pages that failed to load so far (never retried; their
+                                    // clusters are drawn from coarser levels)
   uint64_t gpu_bytes_used = 0;
   uint64_t host_bytes_used = 0;
   uint64_t rss_bytes = 0;

@@ -513,17 +513,20 @@ struct Pager::Impl {
     return out;
   }
 
-  [[noreturn]] void throwLoadError(uint32_t page, const std::exception_ptr& error) const {
-    const std::string what = "pinned page " + std::to_string(page) + " failed to load: ";
+  // The error of a failed page as a FormatError naming the file (and byte), prefixed by `what`.
+  FormatError loadError(const std::string& what, const std::exception_ptr& error) const {
     try {
       std::rethrow_exception(error);
     } catch (const FormatError& e) {
       if (e.where() == FormatError::Where::Byte)
-        throw FormatError::atByte(e.file(), e.position(), what + e.reason());
-      throw FormatError(e.file().empty() ? view.fileName() : e.file(), what + e.reason());
+        return FormatError::atByte(e.file(), e.position(), what + e.reason());
+      return FormatError(e.file().empty() ? view.fileName() : e.file(), what + e.reason());
     } catch (const std::exception& e) {
-      throw FormatError(view.fileName(), what + e.what());
+      return FormatError(view.fileName(), what + e.what());
     }
+  }
+  [[noreturn]] void throwLoadError(uint32_t page, const std::exception_ptr& error) const {
+    throw loadError("pinned page " + std::to_string(page) + " failed to load: ", error);
   }
 
   const PackageView& view;
@@ -548,6 +551,7 @@ struct Pager::Impl {
   std::vector<uint64_t> want_frame;  // frame of that request
   std::vector<LoadedPage> ready;
   std::vector<std::pair<uint32_t, std::exception_ptr>> errors;
+  size_t errors_reported = 0;  // errors takeLoadErrors() has handed out
   std::vector<Placement> placement;
   std::vector<GpuCluster> gpu_clusters;
   std::set<uint32_t> resident_pages;
@@ -678,6 +682,16 @@ PageState Pager::state(uint32_t page) const {
 bool Pager::resident(uint32_t page) const {
   const Impl& m = *impl_;
   return page < m.state.size() && m.state[page] == static_cast<uint8_t>(PageState::Resident);
+}
+
+std::vector<std::string> Pager::takeLoadErrors() {
+  Impl& m = *impl_;
+  std::vector<std::string> out;
+  for (; m.errors_reported < m.errors.size(); ++m.errors_reported) {
+    const auto& [page, error] = m.errors[m.errors_reported];
+    out.push_back(m.loadError("page " + std::to_string(page) + " failed to load: ", error).what());
+  }
+  return out;
 }
 
 bool Pager::failed(uint32_t page) const {

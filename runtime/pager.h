@@ -28,6 +28,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "package_format.h"
@@ -144,6 +145,9 @@ class Pager {
   bool resident(uint32_t page) const;  // cheap; render thread
   // True once the page failed to load (it is then never retried). Render thread.
   bool failed(uint32_t page) const;
+  // The pages that failed to load since the last call, each once, as messages naming the
+  // package, the page and the reason (a checksum mismatch names its byte). Render thread.
+  std::vector<std::string> takeLoadErrors();
   // Placement of a cluster of a resident page (stale for clusters of other pages).
   const GpuCluster& gpuCluster(uint32_t cluster) const;
   PagerStats stats() const;

@@ -386,6 +386,48 @@ std::filesystem::path bunnyPackageForCli() {
 
 // `render` headless: a generated orbit, its path saved and replayed, stats as CSV and JSON, PNG
 // colour and id frames, and the same path replayed from the file gives the same frame count.
+// A streamed page that fails its checksum is not drawn silently: render says which page, at which
+// byte, as it happens; the frames and statistics are still written (the cut draws the page's
+// coarser ancestors), the summary counts it, and the exit status says the frames are not the
+// package's.
+TEST(Cli, RenderSaysWhenAStreamedPageFailsItsChecksum) {
+  auto package = bunnyPackageForCli();
+  auto dir = test::scratchDir();
+  std::string bytes = test::readFile(package);
+  std::vector<uint32_t> fine_pages;
+  {
+    // Pages of full-resolution clusters alone (never a pinned root page), each corrupted in its
+    // middle.
+    auto view = PackageView::open(package);
+    std::vector<uint8_t> coarse(view.pages().size(), 0);
+    for (const pkg::ClusterRecord& c : view.clusters())
+      if (c.page < coarse.size() && (c.level > 0 || c.parent_group == pkg::kNone)) coarse[c.page] = 1;
+    for (uint32_t p = 0; p < coarse.size(); ++p) {
+      if (coarse[p]) continue;
+      fine_pages.push_back(p);
+      const pkg::PageRecord& record = view.pages()[p];
+      bytes[view.section(pkg::SectionType::PageData).offset + record.offset + record.stored_bytes / 2] ^= 0x5a;
+    }
+  }
+  ASSERT_FALSE(fine_pages.empty()) << "no page of level 0 alone";
+  const auto broken = dir / "broken.twk";
+  test::writeFile(broken, bytes);
+  RunResult r = run("render --quiet " + broken.string() + " --orbit 4 --size 640x480 --tau 0.1 --out " +
+                    (dir / "out").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("warning: " + broken.string()), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find(" failed to load: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("pages failed to load and were drawn from coarser levels"), std::string::npos)
+      << r.output;
+  auto summary = nlohmann::json::parse(test::readFile(dir / "out" / "summary.json"));
+  EXPECT_EQ(summary["frames"], 4);
+  EXPECT_GE(summary["page_load_errors"].get<int>(), 1);
+  // The intact package renders the same path with no error.
+  RunResult ok = run("render --quiet " + package.string() + " --orbit 4 --size 640x480 --tau 0.1");
+  EXPECT_EQ(ok.exit_code, 0) << ok.output;
+  EXPECT_EQ(ok.output.find("failed to load"), std::string::npos) << ok.output;
+}
+
 // A STEP assembly as a user brings it: info counts its part instances, the package verifies,
 // and a pick names the part under the pixel by its assembly path.
 TEST(Cli, StepAssemblyImportsPreprocessesAndPicksAPartByItsPath) {

@@ -236,7 +236,21 @@ struct RenderedPath {
   uint64_t walk_frames = 0;
   int walk_steps = 1;
   double first_frame_ms = 0.0;  // from opening the package to the first recorded frame
+  std::vector<std::string> load_errors;  // pages that failed to load, in order
 };
+
+// Pages that failed to load (a checksum mismatch, a read error) are drawn from their coarser
+// ancestors; each is said once on stderr, as it happens, so the frames are not silently wrong.
+constexpr size_t kMostLoadErrorsPrinted = 10;
+
+void reportLoadErrors(Walkthrough& walk, RenderedPath& rendered) {
+  for (const std::string& message : walk.pager().takeLoadErrors()) {
+    if (rendered.load_errors.size() < kMostLoadErrorsPrinted)
+      std::fprintf(stderr, "terawalk: warning: %s; its clusters are drawn from coarser levels\n",
+                   message.c_str());
+    rendered.load_errors.push_back(message);
+  }
+}
 
 RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Walkthrough& walk,
                         const CameraPath& path, const Aabb& bounds, Clock::time_point open_start,
@@ -266,6 +280,7 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
     }
     FrameStats stats = walk.renderFrame(path.sample(t, base), t);
     stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
+    reportLoadErrors(walk, rendered);
     if (i == 0) rendered.first_frame_ms = msSince(open_start);
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
     if (args.check_occlusion) occlusion_check.check(walk, stats);
@@ -352,6 +367,7 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"median_hzb_build_ms", medianOf(all, [](const FrameStats& f) { return f.hzb_build_ms; })},
       {"median_hzb_test_ms", medianOf(all, [](const FrameStats& f) { return f.hzb_test_ms; })},
       {"frames_in_view_cell", cell_frames},
+      {"page_load_errors", rendered.load_errors.size()},
       {"peak_rss_bytes", peak_rss},
       {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
       {"host_budget_bytes", options.pager.host_budget_bytes},
@@ -424,6 +440,11 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   if (args.check_occlusion) occlusion_check.summarize(args, rendered.frames, summary);
   if (!args.out_dir.empty()) writeRenderOutputs(args.out_dir, rendered.frames, summary);
   std::printf("%s\n", summary.dump(1).c_str());
+  // The frames and statistics are written; the exit status still says they are not the package's.
+  if (!rendered.load_errors.empty())
+    throw std::runtime_error(std::to_string(rendered.load_errors.size()) +
+                             " pages failed to load and were drawn from coarser levels (first: " +
+                             rendered.load_errors.front() + ")");
 }
 
 }  // namespace
