@@ -10,6 +10,7 @@
 #include "layer_filter_sink.h"
 #include "obj_reader.h"
 #include "ply_reader.h"
+#include "scene_range.h"
 #include "ifc_importer.h"
 #include "step_importer.h"
 #include "stl_reader.h"
@@ -63,14 +64,15 @@ void readScene(const std::filesystem::path& path, SceneSink& sink, const ReadOpt
     z_up.up = UpAxis::Z;
     return readScene(path, turn, z_up);
   }
+  RangeCheckedSink checked(path.string(), sink);
   switch (sceneFormatOf(path)) {
-    case SceneFormat::Tws: return readTws(path, sink, options);
-    case SceneFormat::Ply: return readPly(path, sink, options);
-    case SceneFormat::Obj: return readObj(path, sink, options);
-    case SceneFormat::Stl: return readStl(path, sink, options);
-    case SceneFormat::Gltf: return readGltf(path, sink, options);
-    case SceneFormat::Step: return readStep(path, sink, options);
-    case SceneFormat::Ifc: return readIfc(path, sink, options);
+    case SceneFormat::Tws: return readTws(path, checked, options);
+    case SceneFormat::Ply: return readPly(path, checked, options);
+    case SceneFormat::Obj: return readObj(path, checked, options);
+    case SceneFormat::Stl: return readStl(path, checked, options);
+    case SceneFormat::Gltf: return readGltf(path, checked, options);
+    case SceneFormat::Step: return readStep(path, checked, options);
+    case SceneFormat::Ifc: return readIfc(path, checked, options);
     case SceneFormat::Unknown: break;
   }
   throw FormatError(path.string(),
