@@ -178,6 +178,10 @@ void readAscii(FileReader& reader, const std::string& stem, SceneSink& sink,
           if (!text::parseFloat(rest, p.x) || !text::parseFloat(rest, p.y) ||
               !text::parseFloat(rest, p.z))
             reader.failAtLine("expected three numbers after 'vertex'");
+          text::skipBlanks(rest);
+          if (!rest.empty())
+            reader.failAtLine("unexpected '" + std::string(rest.substr(0, 32)) +
+                              "' after the vertex's three numbers");
           if (loop_vertices == 0) {
             first = p;
           } else if (loop_vertices >= 2) {

@@ -150,6 +150,12 @@ TEST(StlReader, ErrorsNameTheLineOrByte) {
   EXPECT_EQ(e.position(), 5u);
   EXPECT_NE(e.reason().find("three numbers"), std::string::npos) << e.what();
 
+  // Trailing text after a vertex's numbers is an error, not ignored.
+  e = errorFor("solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0 junk\n");
+  EXPECT_EQ(e.position(), 4u);
+  EXPECT_NE(e.reason().find("unexpected 'junk' after the vertex's three numbers"), std::string::npos)
+      << e.what();
+
   e = errorFor("solid a\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nendloop\n");
   EXPECT_EQ(e.position(), 6u);
   EXPECT_NE(e.reason().find("at least 3"), std::string::npos) << e.what();
