@@ -31,10 +31,9 @@
 #include <gp_Trsf.hxx>
 
 #include <cmath>
-#include <map>
-#include <tuple>
 #include <variant>
 
+#include "face_weld.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -174,35 +173,18 @@ TopoDS_Shape halfSpaceSolid(const HalfSpace& h, const Bnd_Box& reach) {
   return common.Shape();
 }
 
-// The faces' triangles, welded by exact position (BRepMesh puts the same nodes on shared edges).
+// The faces' triangles, welded by exact position (face_weld.h).
 TriangleMesh meshShape(const TopoDS_Shape& shape, double deflection) {
   TriangleMesh out;
   BRepMesh_IncrementalMesh mesher(shape, deflection, false, kAngularDeflectionRad, false);
-  std::map<std::tuple<double, double, double>, uint32_t> weld;
+  FaceWeld weld(out);
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
     const TopoDS_Face& face = TopoDS::Face(e.Current());
     TopLoc_Location location;
     const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
     if (triangulation.IsNull()) continue;
-    const gp_Trsf placement = location.Transformation();
-    const int nodes = triangulation->NbNodes();
-    std::vector<uint32_t> index(size_t(nodes) + 1);
-    for (int n = 1; n <= nodes; ++n) {
-      const gp_Pnt p = triangulation->Node(n).Transformed(placement);
-      auto [it, inserted] = weld.emplace(std::make_tuple(p.X(), p.Y(), p.Z()), uint32_t(out.positions.size()));
-      if (inserted) out.positions.push_back(glm::vec3(p.X(), p.Y(), p.Z()));
-      index[size_t(n)] = it->second;
-    }
-    const bool reversed = face.Orientation() == TopAbs_REVERSED;
-    for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
-      int a, b, c;
-      triangulation->Triangle(t).Get(a, b, c);
-      if (a < 1 || b < 1 || c < 1 || a > nodes || b > nodes || c > nodes) continue;
-      const uint32_t ia = index[size_t(a)], ib = index[size_t(b)], ic = index[size_t(c)];
-      if (ia == ib || ib == ic || ia == ic) continue;
-      if (reversed) out.indices.insert(out.indices.end(), {ia, ic, ib});
-      else out.indices.insert(out.indices.end(), {ia, ib, ic});
-    }
+    weld.addNodes(*triangulation, location.Transformation());
+    weld.addTriangles(*triangulation, face.Orientation() == TopAbs_REVERSED);
   }
   return out;
 }

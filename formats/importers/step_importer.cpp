@@ -52,6 +52,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "face_weld.h"
 #include "format_error.h"
 #include "step_bspline_faces.h"
 #include "step_primitives.h"
@@ -162,22 +163,14 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
   BRepMesh_IncrementalMesh mesher(shape, deflection, false, kAngularDeflectionRad, false);
 
   // Nodes shared along edges are exact copies, so a weld by exact position joins the faces.
-  std::map<std::tuple<double, double, double>, uint32_t> weld;
+  FaceWeld weld(part.mesh, part.center);
   for (TopExp_Explorer e(shape, TopAbs_FACE); e.More(); e.Next()) {
     const TopoDS_Face& face = TopoDS::Face(e.Current());
     TopLoc_Location location;
     const Handle(Poly_Triangulation) triangulation = BRep_Tool::Triangulation(face, location);
     if (triangulation.IsNull()) continue;
     const gp_Trsf placement = location.Transformation();
-    std::vector<uint32_t> node_index(size_t(triangulation->NbNodes()) + 1);
-    for (int n = 1; n <= triangulation->NbNodes(); ++n) {
-      const gp_Pnt p = triangulation->Node(n).Transformed(placement);
-      const auto key = std::make_tuple(p.X(), p.Y(), p.Z());
-      auto [it, inserted] = weld.emplace(key, uint32_t(part.mesh.positions.size()));
-      if (inserted)
-        part.mesh.positions.push_back(glm::vec3(glm::dvec3(p.X(), p.Y(), p.Z()) - part.center));
-      node_index[size_t(n)] = it->second;
-    }
+    const std::vector<uint32_t>& node_index = weld.addNodes(*triangulation, placement);
     const GeomAbs_SurfaceType kind = GeomAdaptor_Surface(BRep_Tool::Surface(face)).GetType();
     if (kind == GeomAbs_BSplineSurface || kind == GeomAbs_BezierSurface) {
       ++part.bspline_faces;
@@ -187,19 +180,7 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
         continue;
       }
     }
-    const bool reversed = face.Orientation() == TopAbs_REVERSED;
-    for (int t = 1; t <= triangulation->NbTriangles(); ++t) {
-      int a, b, c;
-      triangulation->Triangle(t).Get(a, b, c);
-      if (a < 1 || b < 1 || c < 1 || a > triangulation->NbNodes() ||
-          b > triangulation->NbNodes() || c > triangulation->NbNodes())
-        continue;
-      const uint32_t ia = node_index[size_t(a)], ib = node_index[size_t(b)],
-                     ic = node_index[size_t(c)];
-      if (ia == ib || ib == ic || ia == ic) continue;  // collapsed by the weld
-      if (reversed) part.mesh.indices.insert(part.mesh.indices.end(), {ia, ic, ib});
-      else part.mesh.indices.insert(part.mesh.indices.end(), {ia, ib, ic});
-    }
+    weld.addTriangles(*triangulation, face.Orientation() == TopAbs_REVERSED);
   }
   return part;
 }
