@@ -12,11 +12,13 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
+#include <nlohmann/json.hpp>
 #include <glm/gtc/type_ptr.hpp>
 #include <tiny_gltf.h>
 
@@ -32,8 +34,23 @@ constexpr uint64_t kMaxFileBytes = 0xffffffffu;  // tinygltf takes unsigned int 
 // nest a handful of levels.
 constexpr int kMaxJsonDepth = 256;
 
-// --- File access for tinygltf: plain regular files, nothing expanded, nothing written. ---
+// --- File access for tinygltf: plain regular files inside the model's folder, nothing
+// expanded, nothing written. A uri of ../../etc/hostname or /etc/hostname is not followed. ---
 
+// Whether `path` lies inside `folder` (both made canonical, so links and .. are resolved).
+bool insideFolder(const std::string& path, const std::filesystem::path& folder) {
+  std::error_code ec;
+  const std::filesystem::path resolved = std::filesystem::weakly_canonical(path, ec);
+  if (ec) return false;
+  auto [f, r] = std::mismatch(folder.begin(), folder.end(), resolved.begin(), resolved.end());
+  return f == folder.end();
+}
+
+const std::filesystem::path& modelFolder(void* user_data) {
+  return *static_cast<const std::filesystem::path*>(user_data);
+}
+
+// Existence is answered plainly; reading refuses what lies outside, with the reason.
 bool fileExists(const std::string& path, void*) {
   std::error_code ec;
   return std::filesystem::is_regular_file(path, ec);
@@ -42,8 +59,12 @@ bool fileExists(const std::string& path, void*) {
 std::string expandFilePath(const std::string& path, void*) { return path; }
 
 bool readWholeFile(std::vector<unsigned char>* out, std::string* err, const std::string& path,
-                   void*) {
+                   void* user_data) {
   std::error_code ec;
+  if (!insideFolder(path, modelFolder(user_data))) {
+    if (err) *err += path + " lies outside the model's folder " + modelFolder(user_data).string() + "; not read\n";
+    return false;
+  }
   if (!std::filesystem::is_regular_file(path, ec)) {
     if (err) *err += "not a regular file: " + path + "\n";
     return false;
@@ -101,10 +122,37 @@ int jsonDepth(const unsigned char* text, size_t size) {
   return deepest;
 }
 
-std::string oneLine(std::string s) {
-  while (!s.empty() && (s.back() == '\n' || s.back() == ' ')) s.pop_back();
-  for (size_t i = 0; (i = s.find('\n', i)) != std::string::npos;) s.replace(i, 1, "; ");
-  return s;
+// tinygltf's messages, joined into one line, each cut at kMostMessageChars (a bad data URI is
+// quoted whole in its message: hundreds of kilobytes).
+constexpr size_t kMostMessageChars = 300;
+
+std::string oneLine(const std::string& text) {
+  std::string out;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string message = text.substr(start, end - start);
+    while (!message.empty() && message.back() == ' ') message.pop_back();
+    if (message.size() > kMostMessageChars)
+      message = message.substr(0, kMostMessageChars) + "... (" +
+                std::to_string(message.size() - kMostMessageChars) + " more characters)";
+    if (!message.empty()) out += (out.empty() ? "" : "; ") + message;
+    start = end + 1;
+  }
+  return out;
+}
+
+// The extensions a file may require and still be read for its geometry: they change materials,
+// textures or lights, which TeraWalk does not take. Any other required extension (Draco or
+// meshopt compression, quantized or instanced meshes) changes the geometry itself.
+bool geometryUnchangedBy(const std::string& extension) {
+  static const char* const kIgnorable[] = {"KHR_texture_transform", "KHR_texture_basisu",
+                                           "EXT_texture_webp", "KHR_lights_punctual",
+                                           "KHR_materials_"};
+  for (const char* prefix : kIgnorable)
+    if (extension.rfind(prefix, 0) == 0) return true;
+  return false;
 }
 
 uint32_t readU32(const std::vector<unsigned char>& bytes, size_t at) {
@@ -164,11 +212,15 @@ class GltfParser {
 
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(&skipImage, nullptr);
-    loader.SetFsCallbacks(tinygltf::FsCallbacks{&fileExists, &expandFilePath, &readWholeFile,
-                                                &refuseWrite, nullptr});
-    std::string err, warn;
     std::string base_dir = path_.parent_path().string();
     if (base_dir.empty()) base_dir = ".";
+    std::error_code ec;
+    std::filesystem::path folder = std::filesystem::weakly_canonical(base_dir, ec);
+    if (ec) folder = base_dir;
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{&fileExists, &expandFilePath, &readWholeFile,
+                                                &refuseWrite, &folder});
+    checkByteCounts(bytes.data() + json_start, json_size);
+    std::string err, warn;
     bool ok = false;
     try {
       if (binary)
@@ -188,6 +240,35 @@ class GltfParser {
       else if (!warnings.empty()) reason += " (warnings: " + warnings + ")";
       fail("glTF: " + (reason.empty() ? std::string("cannot be loaded") : reason));
     }
+    for (const std::string& extension : model_.extensionsRequired)
+      if (!geometryUnchangedBy(extension))
+        fail("requires the glTF extension " + extension + ", which TeraWalk cannot read");
+  }
+
+  // Offsets, lengths and counts must be whole, non-negative numbers: tinygltf reads -4 or 1e20
+  // as 0 and says nothing, so they are checked in the JSON first.
+  void checkByteCounts(const unsigned char* json, size_t size) const {
+    const nlohmann::json doc = nlohmann::json::parse(json, json + size, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return;  // tinygltf reports the syntax error
+    auto check = [&](const char* array, std::initializer_list<const char*> keys) {
+      auto it = doc.find(array);
+      if (it == doc.end() || !it->is_array()) return;
+      for (size_t i = 0; i < it->size(); ++i) {
+        const nlohmann::json& item = (*it)[i];
+        if (!item.is_object()) continue;
+        for (const char* key : keys) {
+          auto v = item.find(key);
+          if (v == item.end()) continue;
+          const bool whole = v->is_number_unsigned() || (v->is_number_integer() && v->get<int64_t>() >= 0);
+          if (!whole || v->get<uint64_t>() > (uint64_t(1) << 53))
+            fail(std::string(array) + "[" + std::to_string(i) + "]." + key + " is " +
+                 v->dump().substr(0, 40) + ", not a whole number of at most 2^53");
+        }
+      }
+    };
+    check("buffers", {"byteLength"});
+    check("bufferViews", {"byteOffset", "byteLength", "byteStride"});
+    check("accessors", {"byteOffset", "count"});
   }
 
   // GLB layout: 12-byte header (magic, version, length), then chunks of (length, type, data).

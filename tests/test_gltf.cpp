@@ -181,6 +181,61 @@ TEST(GltfReader, InconsistentFilesGiveClearErrors) {
   }
 }
 
+// What a hostile file tries: a buffer outside the model's folder, offsets that tinygltf would
+// read as 0, a required extension that changes the geometry, a data URI of 200 KB quoted whole
+// into the error. Each is a short error naming the file and the field.
+TEST(GltfReader, HostileFieldsAreRefusedNamingTheField) {
+  const auto scratch = test::scratchDir();
+  const auto dir = scratch / "model";
+  std::filesystem::create_directories(dir);
+  test::writeFile(scratch / "secret.bin", std::string(1024, 's'));
+  auto errorIn = [&](const Json& doc) {
+    test::writeFile(dir / "hostile.gltf", doc.dump());
+    test::NullSink sink;
+    try {
+      readGltf(dir / "hostile.gltf", sink);
+    } catch (const FormatError& e) {
+      EXPECT_NE(std::string(e.what()).find("hostile.gltf"), std::string::npos) << e.what();
+      EXPECT_LT(std::string(e.what()).size(), 1500u) << "one short line";
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  {
+    Json doc = fixtureJson();
+    doc["buffers"][0]["uri"] = "../secret.bin";
+    EXPECT_NE(errorIn(doc).find("lies outside the model's folder"), std::string::npos);
+    // tinygltf looks an absolute uri up under the model's folder, where it is not.
+    doc["buffers"][0]["uri"] = (scratch / "secret.bin").string();
+    EXPECT_NE(errorIn(doc), "");
+  }
+  for (const Json& bad : {Json(-4), Json(1e20), Json(0.5)}) {
+    Json doc = fixtureJson();
+    doc["bufferViews"][0]["byteOffset"] = bad;
+    EXPECT_NE(errorIn(doc).find("bufferViews[0].byteOffset is " + bad.dump()), std::string::npos) << bad;
+  }
+  {
+    Json doc = fixtureJson();
+    doc["accessors"][1]["count"] = -1;
+    EXPECT_NE(errorIn(doc).find("accessors[1].count is -1"), std::string::npos);
+  }
+  {
+    Json doc = fixtureJson();
+    doc["extensionsUsed"] = Json::array({"KHR_draco_mesh_compression"});
+    doc["extensionsRequired"] = Json::array({"KHR_draco_mesh_compression"});
+    EXPECT_NE(errorIn(doc).find("requires the glTF extension KHR_draco_mesh_compression"),
+              std::string::npos);
+    doc["extensionsUsed"] = Json::array({"KHR_materials_unlit"});
+    doc["extensionsRequired"] = Json::array({"KHR_materials_unlit"});
+    EXPECT_EQ(errorIn(doc), "") << "a material extension does not change the geometry";
+  }
+  {
+    Json doc = fixtureJson();
+    doc["buffers"][0]["uri"] = "data:application/octet-stream;base64," + std::string(200000, '!');
+    EXPECT_NE(errorIn(doc), "");
+  }
+}
+
 TEST(GltfReader, DeeplyNestedJsonIsRejectedNotRecursedInto) {
   auto path = test::scratchDir() / "deep.gltf";
   const size_t depth = 100000;

@@ -94,7 +94,7 @@ TEST(SceneRange, ObjectsBeyondTheRangeAreAnErrorNamingFileAndObject) {
 TEST(SceneRange, PreprocessAndSnapshotStopWithTheErrorInsteadOfAborting) {
   const fs::path path = sceneWith(named(1, "huge box", Primitive{Box{glm::vec3(1e20f)}}));
   const fs::path dir = path.parent_path();
-  for (const std::string verb : {"preprocess --quiet " + path.string() + " -o " + (dir / "p.twk").string(),
+  for (const std::string& verb : {"preprocess --quiet " + path.string() + " -o " + (dir / "p.twk").string(),
                                  "snapshot " + path.string() + " -o " + (dir / "p.png").string(),
                                  "info " + path.string()}) {
     const test::CommandResult r = test::runTerawalk(verb);
