@@ -149,5 +149,26 @@ TEST(CoveredBoxFaces, FlagsRoundTrip) {
   }
 }
 
+// Thousands of coincident copies (a legal but pathological input: an export that repeats its
+// parts) are indexed once: every copy of the left box gets its +X face covered by the right box,
+// the right box its -X face, the counts include every copy, and a copy on another layer is not
+// taken for one (its face stays uncovered).
+TEST(CoveredBoxFaces, CoincidentCopiesShareTheirFacesResult) {
+  std::vector<pkg::InstanceRecord> boxes;
+  const int kCopies = 3000;
+  for (int i = 0; i < kCopies; ++i) boxes.push_back(box({0.5f, 0.0f, 0.0f}, {0.5f, 0.5f, 0.5f}, glm::mat3(1.0f), 0));
+  boxes.push_back(box({1.5f, 0.0f, 0.0f}, {0.5f, 0.5f, 0.5f}, glm::mat3(1.0f), 0));
+  boxes.push_back(box({0.5f, 0.0f, 0.0f}, {0.5f, 0.5f, 0.5f}, glm::mat3(1.0f), 1));  // other layer
+  const std::vector<uint32_t> layers = {0, 1};
+  CoveredFaceStats stats;
+  const std::vector<uint8_t> faces = findCoveredBoxFaces(boxes, layers, &stats);
+  for (int i = 0; i < kCopies; ++i) ASSERT_EQ(faces[size_t(i)], kPlusX) << "copy " << i;
+  EXPECT_EQ(faces[kCopies], kMinusX);
+  EXPECT_EQ(faces[kCopies + 1], 0) << "the copy on another layer";
+  EXPECT_EQ(stats.boxes, uint64_t(kCopies + 2));
+  EXPECT_EQ(stats.covered_faces, uint64_t(kCopies + 1));
+  EXPECT_EQ(stats.boxes_with_covered_faces, uint64_t(kCopies + 1));
+}
+
 }  // namespace
 }  // namespace tw
