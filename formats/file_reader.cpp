@@ -97,22 +97,52 @@ void FileReader::consume(size_t bytes) {
   offset_ += bytes;
 }
 
+// Where the next line ends in the buffered bytes: "\n", "\r\n" or a lone "\r" (files written
+// with classic Mac OS line ends). False when the buffer holds no complete line end yet.
+bool FileReader::findLineEnd(size_t& length, size_t& consumed) const {
+  const char* start = buffer_.data() + begin_;
+  const size_t avail = end_ - begin_;
+  const bool file_end_buffered = offset_ + avail >= size_;
+  const char* nl = static_cast<const char*>(std::memchr(start, '\n', avail));
+  const size_t before_nl = nl ? size_t(nl - start) : avail;
+  const char* cr = static_cast<const char*>(std::memchr(start, '\r', before_nl));
+  if (cr) {
+    const size_t at = size_t(cr - start);
+    if (nl && at + 1 == before_nl) {  // "\r\n"
+      length = at;
+      consumed = at + 2;
+      return true;
+    }
+    if (at + 1 < avail || file_end_buffered) {  // a lone "\r" (the next byte is not "\n")
+      length = at;
+      consumed = at + 1;
+      return true;
+    }
+    return false;  // "\r" as the last buffered byte: its "\n" may follow
+  }
+  if (nl) {
+    length = before_nl;
+    consumed = before_nl + 1;
+    return true;
+  }
+  if (file_end_buffered) {  // the last line, without a line end
+    length = avail;
+    consumed = avail;
+    return true;
+  }
+  return false;
+}
+
 bool FileReader::readLine(std::string_view& line) {
   if (atEnd()) return false;
-  const char* start = buffer_.data() + begin_;
-  const void* nl = std::memchr(start, '\n', end_ - begin_);
-  if (!nl) {
+  size_t length = 0, consumed = 0;
+  if (!findLineEnd(length, consumed)) {
     refill();
-    start = buffer_.data() + begin_;
-    nl = std::memchr(start, '\n', end_ - begin_);
-    if (!nl && end_ - begin_ == buffer_.size())
+    if (!findLineEnd(length, consumed))
       fail("line " + std::to_string(line_ + 1) + " is longer than " +
            std::to_string(buffer_.size()) + " bytes");
   }
-  size_t len = nl ? static_cast<size_t>(static_cast<const char*>(nl) - start) : end_ - begin_;
-  size_t consumed = nl ? len + 1 : len;
-  if (len > 0 && start[len - 1] == '\r') --len;
-  line = std::string_view(start, len);
+  line = std::string_view(buffer_.data() + begin_, length);
   begin_ += consumed;
   offset_ += consumed;
   ++line_;

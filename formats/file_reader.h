@@ -53,8 +53,8 @@ class FileReader {
   // Consumes `bytes` bytes previously returned by peek().
   void consume(size_t bytes);
 
-  // Reads one text line (without "\n" or "\r\n"); returns false at end of file. The view is valid
-  // until the next call. Lines longer than the buffer throw FormatError. line() is the 1-based
+  // Reads one text line (without its end: "\n", "\r\n" or a lone "\r"); returns false at end
+  // of file. The view is valid until the next call. Lines longer than the buffer throw FormatError. line() is the 1-based
   // number of the line last returned.
   bool readLine(std::string_view& line);
   uint64_t line() const { return line_; }
@@ -65,6 +65,7 @@ class FileReader {
 
  private:
   void refill();
+  bool findLineEnd(size_t& length, size_t& consumed) const;
 
   std::FILE* file_ = nullptr;
   std::string name_;

@@ -95,6 +95,35 @@ TEST(FileReader, ManyLinesAcrossRefills) {
   EXPECT_EQ(n, 5000);
 }
 
+// Lone CRs (classic Mac OS files: an OBJ written so once read as one empty line), CRLF and LF
+// give the same lines and line numbers, also where a refill falls between a CR and its LF.
+TEST(FileReader, CrCrlfAndLfLinesReadAlikeAcrossRefills) {
+  for (const std::string& end : std::vector<std::string>{"\r", "\r\n", "\n"}) {
+    auto path = test::scratchDir() / "ends.txt";
+    std::string text;
+    for (int i = 0; i < 5000; ++i) text += "v " + std::to_string(i) + std::string(size_t(i % 7), ' ') + end;
+    text += "last";
+    test::writeFile(path, text);
+    FileReader reader(path, 4096);
+    std::string_view line;
+    int n = 0;
+    while (reader.readLine(line)) {
+      if (n < 5000) ASSERT_EQ(line, "v " + std::to_string(n) + std::string(size_t(n % 7), ' ')) << n;
+      else EXPECT_EQ(line, "last");
+      ++n;
+    }
+    EXPECT_EQ(n, 5001) << "ends of " << end.size() << " bytes";
+    EXPECT_EQ(reader.line(), 5001u);
+  }
+  auto path = test::scratchDir() / "mixed.txt";
+  test::writeFile(path, "a\rb\r\nc\n\r\rd\r");
+  FileReader reader(path, 4096);
+  std::string_view line;
+  std::vector<std::string> lines;
+  while (reader.readLine(line)) lines.emplace_back(line);
+  EXPECT_EQ(lines, (std::vector<std::string>{"a", "b", "c", "", "", "d"}));
+}
+
 TEST(FileReader, OverlongLineIsRejectedNotBuffered) {
   auto path = test::scratchDir() / "long.txt";
   test::writeFile(path, "ok\n" + std::string(10000, 'x') + "\n");

@@ -457,5 +457,23 @@ TEST(ObjWriter, UnwritableDestinationThrowsNamingTheFile) {
   }
 }
 
+// An OBJ written with lone CR line ends (classic Mac OS) reads as the same mesh, not as empty.
+TEST(ObjReader, CrOnlyLineEndsReadLikeLf) {
+  const std::string lf = "o tri\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+  std::string cr = lf;
+  std::replace(cr.begin(), cr.end(), '\n', '\r');
+  auto dir = test::scratchDir();
+  test::writeFile(dir / "lf.obj", lf);
+  test::writeFile(dir / "cr.obj", cr);
+  test::CollectingSink a, b;
+  readObj(dir / "lf.obj", a);
+  readObj(dir / "cr.obj", b);
+  ASSERT_EQ(b.objects.size(), 1u);
+  const auto& mesh = std::get<TriangleMesh>(b.objects[0].geometry);
+  EXPECT_EQ(mesh.triangleCount(), 2u);
+  EXPECT_EQ(mesh.indices, std::get<TriangleMesh>(a.objects[0].geometry).indices);
+  EXPECT_EQ(b.objects[0].info.name, "tri");
+}
+
 }  // namespace
 }  // namespace tw
