@@ -667,15 +667,24 @@ PreprocessReport PreprocessRun::finish() {
 
 PreprocessReport runPreprocess(const PreprocessOptions& options) {
   validateOptions(options);
-  PreprocessRun run(options);
-  run.brickInputs();
-  run.findSeams();
-  run.buildBricks();
-  run.mergeUpperLevels();
-  run.pack();
-  run.write();
-  run.buildVisibility();
-  return run.finish();
+  try {
+    PreprocessRun run(options);
+    run.brickInputs();
+    run.findSeams();
+    run.buildBricks();
+    run.mergeUpperLevels();
+    run.pack();
+    run.write();
+    run.buildVisibility();
+    return run.finish();
+  } catch (...) {
+    // A failed run leaves nothing behind: its work folder (up to several times the package)
+    // would keep a full disk full. A cancelled run keeps its finished bricks for --resume, and
+    // so does any run with --keep-work. (A killed run cannot clean up: --resume reuses it.)
+    const bool cancelled = options.progress && options.progress->cancelled();
+    if (!cancelled && !options.keep_work_dir) removeWorkDir(workDirFor(options.output));
+    throw;
+  }
 }
 
 }  // namespace tw

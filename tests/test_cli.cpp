@@ -332,6 +332,36 @@ TEST(Cli, PreprocessStopsAtOnceWhenTheMemoryBudgetIsTooSmall) {
   EXPECT_EQ(ok.exit_code, 0) << enough << ": " << ok.output;
 }
 
+// A disk that fills during preprocess (a 3 MiB tmpfs): a clear error naming the file and the
+// reason, no package, and nothing left in the folder, so the disk is not kept full; once space is
+// freed the same command with --resume finishes with the bytes of a build that never failed.
+TEST(Cli, PreprocessOnAFullDiskLeavesNothingBehindAndResumesAfterSpaceIsFreed) {
+  auto file = test::sharedDataDir() / "duplex-mep.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto dir = test::scratchDir();
+  auto disk = dir / "small-disk";
+  std::filesystem::create_directories(disk);
+  if (test::runShell("mount -t tmpfs -o size=3M tmpfs " + disk.string()).exit_code != 0)
+    GTEST_SKIP() << "mounting a tmpfs needs root (CI runs as root)";
+  struct Unmount {
+    std::string path;
+    ~Unmount() { test::runShell("umount " + path); }
+  } unmount{disk.string()};
+  const auto out = disk / "duplex.twk";
+  RunResult full = run("preprocess --quiet " + file.string() + " -o " + out.string());
+  EXPECT_EQ(full.exit_code, 1) << full.output;
+  EXPECT_NE(full.output.find("No space left on device"), std::string::npos) << full.output;
+  EXPECT_NE(full.output.find(disk.string()), std::string::npos) << full.output;
+  EXPECT_TRUE(std::filesystem::is_empty(disk)) << "the package, its temporary file and the work folder are gone";
+
+  ASSERT_EQ(test::runShell("mount -o remount,size=64M " + disk.string()).exit_code, 0);
+  RunResult resumed = run("preprocess --quiet --resume " + file.string() + " -o " + out.string());
+  ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+  const auto reference = dir / "reference.twk";
+  ASSERT_EQ(run("preprocess --quiet " + file.string() + " -o " + reference.string()).exit_code, 0);
+  EXPECT_EQ(test::readFile(out), test::readFile(reference));
+}
+
 // A real MEP model (926 pipes, ducts and fittings; a third of its triangles exact copies): its
 // DAG halves level after level down to one root cluster, and verify says so, in text and JSON.
 TEST(Cli, VerifyReportsThatARealMepModelHalvesToOneRoot) {
