@@ -262,6 +262,22 @@ TEST(IfcImport, HalfSpacesClipTheirFirstOperand) {
               4.0 * 0.2 * 3.0 - 2.0 * 0.2 * 0.5, 1e-4);
 }
 
+// IfcBooleanResult INTERSECTION: what the wall has in common with the half-space above z = 2.5.
+TEST(IfcImport, AnIntersectionKeepsWhatItsOperandsShare) {
+  const std::string text = wallIfc("#80", R"(#60=IFCCARTESIANPOINT((0.,0.,2.5));
+#61=IFCAXIS2PLACEMENT3D(#60,#7,$);
+#62=IFCPLANE(#61);
+#70=IFCHALFSPACESOLID(#62,.F.);
+#80=IFCBOOLEANRESULT(.INTERSECTION.,#30,#70);
+)");
+  std::vector<std::string> warnings;
+  const test::CollectingSink sink = importText(text, &warnings);
+  for (const std::string& w : warnings) ADD_FAILURE() << w;
+  bool closed = false;
+  EXPECT_NEAR(closedVolume(cutWall(sink), closed), 4.0 * 0.2 * 0.5, 1e-4);
+  EXPECT_TRUE(closed);
+}
+
 // A cut that cannot be made (the opening's body is an open surface) keeps the wall whole and
 // says so, naming the wall's #id.
 TEST(IfcImport, ACutThatFailsKeepsTheHostAndNamesIt) {

@@ -57,8 +57,6 @@ class IfcImporter {
     }
     if (uncut_ > 0)
       warn(std::to_string(uncut_) + " openings or boolean differences could not be cut and were drawn whole");
-    if (intersections_ > 0)
-      warn(std::to_string(intersections_) + " boolean intersections keep their first operand only");
     if (skipped_warnings_ > kMaxWarnings)
       warn(std::to_string(skipped_warnings_ - kMaxWarnings) + " more items skipped");
   }
@@ -342,12 +340,15 @@ class IfcImporter {
     for (uint32_t i : part.indices) mesh_.indices.push_back(base + i);
   }
 
-  // `first` less `tools` and `half_spaces`, added to the product's geometry; `first` whole, with
-  // a warning naming `item`, when the cut fails.
-  void subtractInto(SolidSet first, const SolidSet& tools, const std::vector<HalfSpace>& half_spaces,
-                    uint64_t item, const std::string& what) {
+  // `first` less `tools` and `half_spaces` (or what it has in common with them), added to the
+  // product's geometry; `first` whole, with a warning naming `item`, when the cut fails.
+  void combineInto(SolidSet first, const SolidSet& tools, const std::vector<HalfSpace>& half_spaces,
+                    uint64_t item, const std::string& what, bool intersect = false) {
     try {
-      appendMesh(subtractSolids(first, tools, half_spaces, kDefaultChordalTolerance), glm::dmat4(1.0));
+      const TriangleMesh result =
+          intersect ? intersectSolids(first, tools, half_spaces, kDefaultChordalTolerance)
+                    : subtractSolids(first, tools, half_spaces, kDefaultChordalTolerance);
+      appendMesh(result, glm::dmat4(1.0));
       ++cuts_;
     } catch (const SolidCutError& e) {
       notCut(item, what, e.what());
@@ -374,7 +375,7 @@ class IfcImporter {
     SolidSet host = collectSolids([] {});
     std::swap(host.mesh, mesh_);
     std::swap(host.primitives, primitives_);
-    subtractInto(std::move(host), openings, {}, product_id,
+    combineInto(std::move(host), openings, {}, product_id,
                  std::to_string(it->second.size()) + (it->second.size() == 1 ? " opening" : " openings") +
                      " (IfcRelVoidsElement)");
   }
@@ -468,7 +469,7 @@ class IfcImporter {
   }
 
   // UNION: both operands; DIFFERENCE (IfcBooleanClippingResult is one): the second cut from the
-  // first; INTERSECTION: the first only, counted in a warning.
+  // first; INTERSECTION: what the two have in common.
   void boolean(uint64_t id, const Step21Instance& item, const glm::dmat4& local, int depth) {
     const std::string op = textOf(arg(&item, 0));
     auto operand = [&](size_t i) {
@@ -480,11 +481,8 @@ class IfcImporter {
       operand(2);
       return;
     }
-    if (op != "DIFFERENCE") {
-      ++intersections_;
-      operand(1);
-      return;
-    }
+    if (op != "DIFFERENCE" && op != "INTERSECTION") throw ItemError{"a boolean operator ." + op + "."};
+    const bool intersect = op == "INTERSECTION";
     SolidSet first = collectSolids([&] { operand(1); });
     if (first.empty()) return;
     std::vector<HalfSpace> half_spaces;
@@ -495,11 +493,12 @@ class IfcImporter {
       if (auto h = halfSpace(*second, local)) half_spaces.push_back(*h);
       else tools = collectSolids([&] { operand(2); });
     } catch (const ItemError& e) {
-      notCut(id, "a boolean difference", e.reason);
+      notCut(id, intersect ? "a boolean intersection" : "a boolean difference", e.reason);
       keep(std::move(first));
       return;
     }
-    subtractInto(std::move(first), tools, half_spaces, id, "a boolean difference");
+    combineInto(std::move(first), tools, half_spaces, id,
+                 intersect ? "a boolean intersection" : "a boolean difference", intersect);
   }
 
   void csgPrimitive(uint64_t id, const Step21Instance* in, const glm::dmat4& local, int depth) {
@@ -929,7 +928,7 @@ class IfcImporter {
   std::unordered_map<uint64_t, std::string> layer_of_;
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;
-  int intersections_ = 0, uncut_ = 0, skipped_warnings_ = 0, profile_voids_ = 0;
+  int uncut_ = 0, skipped_warnings_ = 0, profile_voids_ = 0;
   uint32_t cuts_ = 0;
   std::unordered_map<uint64_t, std::vector<uint64_t>> openings_of_;  // host -> opening products
   // The product being imported.

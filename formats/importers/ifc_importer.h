@@ -19,12 +19,12 @@
 //   IfcPresentationLayerAssignment of its representation or items, else its IFC class;
 //   colour: the IfcStyledItem surface colour of its first styled item.
 // - openings (IfcRelVoidsElement) are cut from the product they void, and boolean differences
-//   (IfcBooleanResult, IfcBooleanClippingResult, half-spaces included) are cut from their first
-//   operand, by OpenCASCADE (solid_cut.h); the product is then one mesh; a cut that fails
-//   keeps the uncut geometry with a warning naming the #id;
+//   and intersections (IfcBooleanResult, IfcBooleanClippingResult, half-spaces included) are
+//   computed by OpenCASCADE (solid_cut.h); the product is then one mesh; a cut that fails
+//   keeps the first operand with a warning naming the #id;
 // - faces with holes keep their holes.
-// Not done: boolean intersections keep their first operand (counted in one warning); arcs of
-// indexed polycurves and other profile types are skipped with a warning naming the #id.
+// Not done: arcs of indexed polycurves and other profile types are skipped with a warning naming
+// the #id.
 // Property sets go to the project database (ifc_properties.h).
 //
 // Bad input: text that is not Part 21 is a FormatError naming the file and line; an item whose

@@ -31,6 +31,7 @@
 #include <gp_Trsf.hxx>
 
 #include <cmath>
+#include <memory>
 #include <variant>
 
 #include "face_weld.h"
@@ -191,34 +192,56 @@ TriangleMesh meshShape(const TopoDS_Shape& shape, double deflection) {
 
 }  // namespace
 
-TriangleMesh subtractSolids(const SolidSet& host, const SolidSet& cutters,
-                            const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m) {
+namespace {
+
+enum class Operation { Difference, Intersection };
+
+// `host` combined with `others` and the half-spaces by `op`, meshed.
+TriangleMesh combine(Operation op, const SolidSet& host, const SolidSet& others,
+                     const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m) {
   if (!positiveFinite(chordal_tolerance_m)) throw SolidCutError("a chordal tolerance that is not positive");
   try {
     const TopTools_ListOfShape arguments = solidsOf(host);
     if (arguments.IsEmpty()) return TriangleMesh{};
-    TopTools_ListOfShape tools = solidsOf(cutters);
+    TopTools_ListOfShape tools = solidsOf(others);
     if (!half_spaces.empty()) {
       Bnd_Box reach;
       for (const TopoDS_Shape& s : arguments) BRepBndLib::Add(s, reach);
       for (const HalfSpace& h : half_spaces) tools.Append(halfSpaceSolid(h, reach));
     }
     if (tools.IsEmpty()) {
+      if (op == Operation::Intersection) throw SolidCutError("an intersection with nothing");
       TopoDS_Compound whole;
       BRep_Builder builder;
       builder.MakeCompound(whole);
       for (const TopoDS_Shape& s : arguments) builder.Add(whole, s);
       return meshShape(whole, chordal_tolerance_m);
     }
-    BRepAlgoAPI_Cut cut;
-    cut.SetArguments(arguments);
-    cut.SetTools(tools);
-    cut.Build();
-    if (!cut.IsDone() || cut.HasErrors()) throw SolidCutError("OpenCASCADE's boolean difference failed");
-    return meshShape(cut.Shape(), chordal_tolerance_m);
+    std::unique_ptr<BRepAlgoAPI_BooleanOperation> boolean;
+    if (op == Operation::Difference) boolean = std::make_unique<BRepAlgoAPI_Cut>();
+    else boolean = std::make_unique<BRepAlgoAPI_Common>();
+    boolean->SetArguments(arguments);
+    boolean->SetTools(tools);
+    boolean->Build();
+    if (!boolean->IsDone() || boolean->HasErrors())
+      throw SolidCutError(op == Operation::Difference ? "OpenCASCADE's boolean difference failed"
+                                                      : "OpenCASCADE's boolean intersection failed");
+    return meshShape(boolean->Shape(), chordal_tolerance_m);
   } catch (const Standard_Failure& e) {
     throw SolidCutError(std::string("OpenCASCADE: ") + e.GetMessageString());
   }
+}
+
+}  // namespace
+
+TriangleMesh subtractSolids(const SolidSet& host, const SolidSet& cutters,
+                            const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m) {
+  return combine(Operation::Difference, host, cutters, half_spaces, chordal_tolerance_m);
+}
+
+TriangleMesh intersectSolids(const SolidSet& host, const SolidSet& others,
+                             const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m) {
+  return combine(Operation::Intersection, host, others, half_spaces, chordal_tolerance_m);
 }
 
 }  // namespace tw

@@ -1,4 +1,4 @@
-// Boolean differences of scene solids, through OpenCASCADE's boolean operations.
+// Boolean differences (and intersections) of scene solids, through OpenCASCADE's boolean operations.
 //
 // IFC cuts its solids: a window's opening is subtracted from its wall (IfcRelVoidsElement), a
 // wall is clipped under a sloped roof by a half-space (IfcBooleanClippingResult). Drawing the
@@ -54,5 +54,10 @@ constexpr size_t kMaxCutMeshTriangles = 20000;
 // the host).
 TriangleMesh subtractSolids(const SolidSet& host, const SolidSet& cutters,
                             const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m);
+
+// What `host` has in common with `others` and the half-spaces (IFC's INTERSECTION), the same way;
+// an intersection with nothing is an error.
+TriangleMesh intersectSolids(const SolidSet& host, const SolidSet& others,
+                             const std::vector<HalfSpace>& half_spaces, double chordal_tolerance_m);
 
 }  // namespace tw
