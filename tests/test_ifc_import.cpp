@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <map>
+#include <numbers>
 #include <set>
 
 #include "format_error.h"
@@ -472,6 +473,26 @@ TEST(IfcImport, SteelSectionsAreExtrusionsOfTheirOutline) {
   EXPECT_FLOAT_EQ(e->height, 6.0f);
   std::vector<glm::dvec2> outline(e->profile.begin(), e->profile.end());
   EXPECT_NEAR(0.5 * loopArea2(outline), 2 * 0.18 * 0.0135 + (0.4 - 2 * 0.0135) * 0.0086, 1e-6);
+}
+
+// An IfcIndexedPolyCurve with an arc segment: the half-disc profile is sampled every 10 degrees
+// (18 chords of the unit circle's upper half) and closed by its line segment.
+TEST(IfcImport, ArcSegmentsOfIndexedPolyCurvesAreSampled) {
+  std::vector<std::string> warnings;
+  const test::CollectingSink sink = importText(
+      wallIfc("#95", "#97=IFCCARTESIANPOINTLIST2D(((-1.,0.),(0.,1.),(1.,0.)));\n"
+                     "#98=IFCINDEXEDPOLYCURVE(#97,(IFCARCINDEX((1,2,3)),IFCLINEINDEX((3,1))),.F.);\n"
+                     "#96=IFCARBITRARYCLOSEDPROFILEDEF(.AREA.,$,#98);\n"
+                     "#95=IFCEXTRUDEDAREASOLID(#96,#4,#7,2.);\n"),
+      &warnings);
+  for (const std::string& w : warnings) EXPECT_EQ(w.find("skipped"), std::string::npos) << w;
+  ASSERT_EQ(sink.objects.size(), 1u);
+  const auto* e = std::get_if<Extrusion>(&std::get<Primitive>(sink.objects[0].geometry));
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->profile.size(), 19u);
+  std::vector<glm::dvec2> outline(e->profile.begin(), e->profile.end());
+  EXPECT_NEAR(0.5 * loopArea2(outline), 0.5 * 18 * std::sin(std::numbers::pi / 18.0), 1e-6);
+  for (const glm::vec2& p : e->profile) EXPECT_GE(p.y, -1e-6f) << "the upper half, through (0, 1)";
 }
 
 // A placement chain that loops is followed to a bounded depth, not forever.

@@ -571,16 +571,7 @@ class IfcImporter {
     if (curve->type == "IFCPOLYLINE") {
       for (const Step21Value& p : arg(curve, 0).items) pts.push_back(glm::dvec2(point(f_.deref(p))));
     } else if (curve->type == "IFCINDEXEDPOLYCURVE") {
-      const Step21Instance* list = f_.deref(arg(curve, 0));
-      if (!list) throw ItemError{"an indexed polycurve without points"};
-      if (arg(curve, 1).kind == Kind::List && !arg(curve, 1).items.empty()) {
-        for (const Step21Value& segment : arg(curve, 1).items)
-          if (segment.kind == Kind::Typed && segment.text == "IFCARCINDEX")
-            throw ItemError{"arc segments in a profile are not read"};
-      }
-      for (const Step21Value& c : arg(list, 0).items)
-        if (c.items.size() >= 2)
-          pts.push_back(glm::dvec2(numberOf(c.items[0], 0), numberOf(c.items[1], 0)) * length_);
+      pts = indexedPolyCurvePoints(*curve);
     } else if (curve->type == "IFCCOMPOSITECURVE") {
       for (const Step21Value& sv : arg(curve, 0).items) {
         const Step21Instance* segment = f_.deref(sv);
@@ -599,6 +590,67 @@ class IfcImporter {
     if (std::abs(area2) < 1e-18) throw ItemError{"a profile without area"};
     if (area2 < 0.0) std::reverse(pts.begin(), pts.end());
     return pts;
+  }
+
+  // An IfcIndexedPolyCurve: its points in order, or, when it lists segments, each line segment's
+  // points and each arc (three points: start, one on the way, end) sampled every 10 degrees.
+  std::vector<glm::dvec2> indexedPolyCurvePoints(const Step21Instance& curve) const {
+    const Step21Instance* list = f_.deref(arg(&curve, 0));
+    if (!list) throw ItemError{"an indexed polycurve without points"};
+    std::vector<glm::dvec2> coords;
+    for (const Step21Value& c : arg(list, 0).items)
+      if (c.items.size() >= 2) coords.push_back(glm::dvec2(numberOf(c.items[0], 0), numberOf(c.items[1], 0)) * length_);
+    const Step21Value& segments = arg(&curve, 1);
+    if (segments.kind != Kind::List || segments.items.empty()) return coords;
+    std::vector<glm::dvec2> pts;
+    auto append = [&](const glm::dvec2& p) {
+      if (pts.empty() || glm::length(pts.back() - p) > 1e-9) pts.push_back(p);
+    };
+    for (const Step21Value& segment : segments.items) {
+      if (segment.kind != Kind::Typed || segment.items.empty())
+        throw ItemError{"an indexed polycurve segment that is not a line or arc index"};
+      std::vector<glm::dvec2> p;
+      for (const Step21Value& i : segment.items[0].items) {
+        const double index = numberOf(i, 0);
+        if (!(index >= 1.0 && index <= double(coords.size())))
+          throw ItemError{"an indexed polycurve segment index outside its points"};
+        p.push_back(coords[size_t(index) - 1]);
+      }
+      if (segment.text == "IFCLINEINDEX") {
+        for (const glm::dvec2& q : p) append(q);
+      } else if (segment.text == "IFCARCINDEX") {
+        if (p.size() != 3) throw ItemError{"an arc index without three points"};
+        for (const glm::dvec2& q : arcThrough(p[0], p[1], p[2])) append(q);
+      } else {
+        throw ItemError{"indexed polycurve segment " + segment.text + " is not read"};
+      }
+    }
+    return pts;
+  }
+
+  // The arc from `a` through `b` to `c`, sampled every 10 degrees at most (a straight line when
+  // the three are collinear).
+  static std::vector<glm::dvec2> arcThrough(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
+    const double d = 2.0 * (a.x * (b.y - c.y) + b.x * (c.y - a.y) + c.x * (a.y - b.y));
+    const double scale = std::max({glm::length(b - a), glm::length(c - b), 1e-300});
+    if (std::abs(d) <= 1e-12 * scale * scale) return {a, b, c};
+    auto sq = [](const glm::dvec2& p) { return glm::dot(p, p); };
+    const glm::dvec2 centre((sq(a) * (b.y - c.y) + sq(b) * (c.y - a.y) + sq(c) * (a.y - b.y)) / d,
+                            (sq(a) * (c.x - b.x) + sq(b) * (a.x - c.x) + sq(c) * (b.x - a.x)) / d);
+    const double r = glm::length(a - centre);
+    const double two_pi = 2.0 * std::numbers::pi;
+    auto angle = [&](const glm::dvec2& p) { return std::atan2(p.y - centre.y, p.x - centre.x); };
+    auto ccw = [&](double from, double to) { return std::fmod(std::fmod(to - from, two_pi) + two_pi, two_pi); };
+    const double t0 = angle(a);
+    const double to_c = ccw(t0, angle(c)), to_b = ccw(t0, angle(b));
+    const double sweep = to_b < to_c ? to_c : to_c - two_pi;  // through b
+    const int steps = std::max(2, int(std::ceil(std::abs(sweep) / (std::numbers::pi / 18.0))));
+    std::vector<glm::dvec2> out;
+    for (int i = 0; i <= steps; ++i) {
+      const double t = t0 + sweep * double(i) / double(steps);
+      out.push_back(i == 0 ? a : i == steps ? c : centre + r * glm::dvec2(std::cos(t), std::sin(t)));
+    }
+    return out;
   }
 
   // The points of one segment of a composite curve: a polyline, or a line or circle trimmed by

@@ -23,8 +23,8 @@
 //   computed by OpenCASCADE (solid_cut.h); the product is then one mesh; a cut that fails
 //   keeps the first operand with a warning naming the #id;
 // - faces with holes keep their holes.
-// Not done: arcs of indexed polycurves and other profile types are skipped with a warning naming
-// the #id.
+// Not done: other profile types (ellipses, trapezia, derived and composite profiles) are skipped
+// with a warning naming the #id.
 // Property sets go to the project database (ifc_properties.h).
 //
 // Bad input: text that is not Part 21 is a FormatError naming the file and line; an item whose
