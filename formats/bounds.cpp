@@ -79,7 +79,11 @@ Aabb worldBounds(const SceneObject& object) {
     for (const glm::vec3& p : mesh->positions) out.add(t.apply(p));
     return out;
   }
-  LocalBox box = localBounds(object.geometry);
+  return placedBox(localBounds(object.geometry), t);
+}
+
+Aabb placedBox(const LocalBox& box, const Transform& t) {
+  Aabb out;
   if (box.min.x > box.max.x) return out;
   for (int i = 0; i < 8; ++i) {
     glm::vec3 corner{(i & 1) ? box.max.x : box.min.x, (i & 2) ? box.max.y : box.min.y,

@@ -40,5 +40,7 @@ struct LocalBox {
 LocalBox localBounds(const Geometry& geometry);
 // The same for one primitive in its canonical frame (a torus segment's is its whole torus's).
 LocalBox primitiveBounds(const Primitive& primitive);
+// World bounds of a local box carried by `t`: its eight corners placed.
+Aabb placedBox(const LocalBox& box, const Transform& t);
 
 }  // namespace tw

@@ -26,18 +26,26 @@ std::string outOfRange(const SceneObject& object) {
   if (!finite(t.origin)) return "its placement's origin is not finite";
   for (int c = 0; c < 3; ++c)
     if (!finite(t.linear[c])) return "its placement's rotation or scale is not finite";
+  // The local box, checked finite on the way (one pass over a mesh's positions: this runs on
+  // every part a reader delivers); its placed corners bound the object, a little generously
+  // for a turned one, which the limits' margins allow.
+  LocalBox box;
   if (const auto* mesh = std::get_if<TriangleMesh>(&object.geometry)) {
-    for (const glm::vec3& p : mesh->positions)
+    for (const glm::vec3& p : mesh->positions) {
       if (!finite(p)) return "a vertex position is not finite";
+      box.min = glm::min(box.min, p);
+      box.max = glm::max(box.max, p);
+    }
   } else if (const auto* patches = std::get_if<NurbsPatchSet>(&object.geometry)) {
     for (const NurbsPatch& patch : patches->patches)
       for (const glm::vec4& c : patch.control_points)
         if (!finite(glm::vec3(c)) || !std::isfinite(c.w)) return "a control point is not finite";
+    box = localBounds(object.geometry);
   } else {
-    const LocalBox box = localBounds(object.geometry);
+    box = localBounds(object.geometry);
     if (!finite(box.min) || !finite(box.max)) return "a primitive dimension is not finite";
   }
-  const Aabb world = worldBounds(object);
+  const Aabb world = placedBox(box, t);
   if (world.empty()) return "";
   if (!finite(world.min) || !finite(world.max)) return "its bounds are not finite";
   const glm::dvec3 extent = world.extent();

@@ -15,6 +15,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "format_error.h"
+#include "plane_arcs.h"
 #include "profile_prism.h"
 #include "solid_cut.h"
 #include "steel_profiles.h"
@@ -63,7 +64,6 @@ class IfcImporter {
 
   uint32_t objects() const { return next_id_; }
   uint32_t products() const { return products_; }
-  uint32_t cuts() const { return cuts_; }
 
  private:
   static constexpr int kMaxWarnings = 20;
@@ -349,7 +349,6 @@ class IfcImporter {
           intersect ? intersectSolids(first, tools, half_spaces, kDefaultChordalTolerance)
                     : subtractSolids(first, tools, half_spaces, kDefaultChordalTolerance);
       appendMesh(result, glm::dmat4(1.0));
-      ++cuts_;
     } catch (const SolidCutError& e) {
       notCut(item, what, e.what());
       keep(std::move(first));
@@ -372,9 +371,9 @@ class IfcImporter {
       }
     });
     if (openings.empty()) return;
-    SolidSet host = collectSolids([] {});
-    std::swap(host.mesh, mesh_);
-    std::swap(host.primitives, primitives_);
+    SolidSet host{std::move(mesh_), std::move(primitives_)};
+    mesh_ = TriangleMesh{};
+    primitives_.clear();
     combineInto(std::move(host), openings, {}, product_id,
                  std::to_string(it->second.size()) + (it->second.size() == 1 ? " opening" : " openings") +
                      " (IfcRelVoidsElement)");
@@ -483,22 +482,22 @@ class IfcImporter {
     }
     if (op != "DIFFERENCE" && op != "INTERSECTION") throw ItemError{"a boolean operator ." + op + "."};
     const bool intersect = op == "INTERSECTION";
+    const std::string what = intersect ? "a boolean intersection" : "a boolean difference";
     SolidSet first = collectSolids([&] { operand(1); });
     if (first.empty()) return;
     std::vector<HalfSpace> half_spaces;
     SolidSet tools;
     try {
       const Step21Instance* second = f_.deref(arg(&item, 2));
-      if (!second) throw ItemError{"a boolean difference without a second operand"};
+      if (!second) throw ItemError{what + " without a second operand"};
       if (auto h = halfSpace(*second, local)) half_spaces.push_back(*h);
       else tools = collectSolids([&] { operand(2); });
     } catch (const ItemError& e) {
-      notCut(id, intersect ? "a boolean intersection" : "a boolean difference", e.reason);
+      notCut(id, what, e.reason);
       keep(std::move(first));
       return;
     }
-    combineInto(std::move(first), tools, half_spaces, id,
-                 intersect ? "a boolean intersection" : "a boolean difference", intersect);
+    combineInto(std::move(first), tools, half_spaces, id, what, intersect);
   }
 
   void csgPrimitive(uint64_t id, const Step21Instance* in, const glm::dmat4& local, int depth) {
@@ -628,31 +627,6 @@ class IfcImporter {
     return pts;
   }
 
-  // The arc from `a` through `b` to `c`, sampled every 10 degrees at most (a straight line when
-  // the three are collinear).
-  static std::vector<glm::dvec2> arcThrough(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c) {
-    const double d = 2.0 * (a.x * (b.y - c.y) + b.x * (c.y - a.y) + c.x * (a.y - b.y));
-    const double scale = std::max({glm::length(b - a), glm::length(c - b), 1e-300});
-    if (std::abs(d) <= 1e-12 * scale * scale) return {a, b, c};
-    auto sq = [](const glm::dvec2& p) { return glm::dot(p, p); };
-    const glm::dvec2 centre((sq(a) * (b.y - c.y) + sq(b) * (c.y - a.y) + sq(c) * (a.y - b.y)) / d,
-                            (sq(a) * (c.x - b.x) + sq(b) * (a.x - c.x) + sq(c) * (b.x - a.x)) / d);
-    const double r = glm::length(a - centre);
-    const double two_pi = 2.0 * std::numbers::pi;
-    auto angle = [&](const glm::dvec2& p) { return std::atan2(p.y - centre.y, p.x - centre.x); };
-    auto ccw = [&](double from, double to) { return std::fmod(std::fmod(to - from, two_pi) + two_pi, two_pi); };
-    const double t0 = angle(a);
-    const double to_c = ccw(t0, angle(c)), to_b = ccw(t0, angle(b));
-    const double sweep = to_b < to_c ? to_c : to_c - two_pi;  // through b
-    const int steps = std::max(2, int(std::ceil(std::abs(sweep) / (std::numbers::pi / 18.0))));
-    std::vector<glm::dvec2> out;
-    for (int i = 0; i <= steps; ++i) {
-      const double t = t0 + sweep * double(i) / double(steps);
-      out.push_back(i == 0 ? a : i == steps ? c : centre + r * glm::dvec2(std::cos(t), std::sin(t)));
-    }
-    return out;
-  }
-
   // The points of one segment of a composite curve: a polyline, or a line or circle trimmed by
   // two Cartesian points (arcs sampled every 10 degrees at most).
   std::vector<glm::dvec2> segmentPoints(const Step21Instance* c) const {
@@ -681,12 +655,7 @@ class IfcImporter {
     double t1 = std::atan2(b->y - centre.y, b->x - centre.x);
     if (sense) { while (t1 <= t0) t1 += 2.0 * std::numbers::pi; }
     else { while (t1 >= t0) t1 -= 2.0 * std::numbers::pi; }
-    const int steps = std::max(1, int(std::ceil(std::abs(t1 - t0) / (std::numbers::pi / 18.0))));
-    for (int i = 0; i <= steps; ++i) {
-      const double t = t0 + (t1 - t0) * double(i) / double(steps);
-      pts.push_back(centre + r * glm::dvec2(std::cos(t), std::sin(t)));
-    }
-    return pts;
+    return arcPoints(centre, r, t0, t1 - t0);
   }
 
   // A profile as loops in the extrusion's plane (its own 2D placement applied): the outer one
@@ -981,7 +950,6 @@ class IfcImporter {
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;
   int uncut_ = 0, skipped_warnings_ = 0, profile_voids_ = 0;
-  uint32_t cuts_ = 0;
   std::unordered_map<uint64_t, std::vector<uint64_t>> openings_of_;  // host -> opening products
   // The product being imported.
   std::string product_type_;
