@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
@@ -20,7 +21,8 @@ namespace tw {
 namespace {
 
 constexpr uint32_t kBlobMagic = 0x43425754u;  // "TWBC"
-constexpr uint32_t kBlobVersion = 2;  // 2: vertex-clustered groups (GroupMethod::Merged)
+constexpr uint32_t kBlobVersion = 3;  // 2: vertex-clustered groups (GroupMethod::Merged); 3: rims
+                                      // welded across bricks first (cross_brick_weld.h)
 
 struct BlobHeader {
   uint32_t magic, version, key, reserved;
@@ -143,7 +145,7 @@ void BrickCache::clear() {
 std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   ByteWriter w;
   w.put(uint32_t{0x53425754u});  // "TWBS"
-  w.put(uint32_t{3});  // 3: triangles_repeated (bricks of 2 kept repeated triangles)
+  w.put(uint32_t{4});  // 3: triangles_repeated; 4: stored_coordinate_extent
   w.put(scene.origin);
   w.put(scene.max_brick_triangles);
   w.put(scene.grid);
@@ -162,6 +164,7 @@ std::vector<uint8_t> serializeBrickedScene(const BrickedScene& scene) {
   w.put(scene.triangle_count);
   w.put(scene.triangles_turned);
   w.put(scene.triangles_repeated);
+  w.put(scene.stored_coordinate_extent);
   const BrickingStats& st = scene.stats;
   for (uint64_t v : {st.buffer_cap_bytes, st.peak_buffered_bytes, st.flushes,
                      st.spill_bytes_written, st.object_table_bytes})
@@ -175,7 +178,7 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
                                      const std::string& source) {
   ByteReader r(bytes, source);
   if (r.get<uint32_t>() != 0x53425754u) r.fail("not a bricked scene description (bad magic)");
-  if (r.get<uint32_t>() != 3) r.fail("unsupported bricked scene version");
+  if (r.get<uint32_t>() != 4) r.fail("unsupported bricked scene version");
   BrickedScene scene;
   scene.work_dir = work_dir;
   scene.origin = r.get<glm::dvec3>();
@@ -212,6 +215,9 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
   if (scene.triangle_count != sum) r.fail("triangle total differs from the sum over bricks");
   scene.triangles_turned = r.get<uint64_t>();
   scene.triangles_repeated = r.get<uint64_t>();
+  scene.stored_coordinate_extent = r.get<double>();
+  if (!(scene.stored_coordinate_extent >= 0.0 && std::isfinite(scene.stored_coordinate_extent)))
+    r.fail("stored coordinate extent is not a finite non-negative number");
   for (const std::string* f :
        {&scene.objects_file, &scene.object_bounds_file, &scene.parametrics_file})
     if (f->empty() || f->find('/') != std::string::npos || *f == "..")

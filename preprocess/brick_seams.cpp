@@ -108,7 +108,7 @@ BrickSeams BrickSeams::fromSortedHashes(const std::vector<std::vector<uint64_t>>
   return seams;
 }
 
-BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
+BrickSeams BrickSeams::find(const BrickedScene& scene, float weld_tolerance, Progress* progress) {
   if (scene.bricks.size() <= 1) return {};
   // A seam edge has triangles in both bricks, so it lies inside the bounds of both. Keeping only
   // the edges inside some other brick's bounds (padded by a hair against rounding) is therefore
@@ -126,34 +126,65 @@ BrickSeams BrickSeams::find(const BrickedScene& scene, Progress* progress) {
     return glm::all(glm::lessThanEqual(box.bounds_min - pad, p)) &&
            glm::all(glm::lessThanEqual(p, box.bounds_max + pad));
   };
-  beginStage(progress, "find seams", n);
-  std::vector<std::vector<uint64_t>> per_brick(n);
-  for (uint32_t b = 0; b < n; ++b) {
-    std::vector<uint32_t> neighbours;
+  std::vector<std::vector<uint32_t>> neighbours(n);
+  for (uint32_t b = 0; b < n; ++b)
     for (uint32_t o = 0; o < n; ++o)
-      if (o != b && overlaps(scene.bricks[b], scene.bricks[o])) neighbours.push_back(o);
-    if (!neighbours.empty()) {
-      const BrickMesh mesh = loadBrick(scene, b);
-      for (const SeamEdgeKey& key : edgeKeys(mesh.positions, mesh.indices)) {
-        const glm::vec3 p0 = glm::vec3(std::bit_cast<float>(key[0]), std::bit_cast<float>(key[1]),
-                                       std::bit_cast<float>(key[2]));
-        const glm::vec3 p1 = glm::vec3(std::bit_cast<float>(key[3]), std::bit_cast<float>(key[4]),
-                                       std::bit_cast<float>(key[5]));
-        for (uint32_t o : neighbours)
-          if (inside(scene.bricks[o], p0) && inside(scene.bricks[o], p1)) {
-            per_brick[b].push_back(seamEdgeHash(key));
-            break;
+      if (o != b && overlaps(scene.bricks[b], scene.bricks[o])) neighbours[b].push_back(o);
+
+  // One brick's seam candidates: the hashes of its edges inside another brick and, when asked,
+  // the end vertices of its rim edges (used other than twice) there, for the weld.
+  std::vector<std::vector<uint64_t>> per_brick(n);
+  std::vector<CrossBrickWeld::Candidate> rims;
+  auto readBrick = [&](uint32_t b, const CrossBrickWeld* weld) {
+    BrickMesh mesh = loadBrick(scene, b);
+    if (weld) weld->apply(mesh.positions);
+    const std::vector<SeamEdgeKey> edges = sortedEdgeKeys(mesh.positions, mesh.indices);
+    mesh = BrickMesh{};
+    per_brick[b].clear();
+    for (size_t i = 0; i < edges.size();) {
+      size_t j = i + 1;
+      while (j < edges.size() && edges[j] == edges[i]) ++j;
+      const SeamEdgeKey& key = edges[i];
+      const glm::vec3 p0 = glm::vec3(std::bit_cast<float>(key[0]), std::bit_cast<float>(key[1]),
+                                     std::bit_cast<float>(key[2]));
+      const glm::vec3 p1 = glm::vec3(std::bit_cast<float>(key[3]), std::bit_cast<float>(key[4]),
+                                     std::bit_cast<float>(key[5]));
+      for (uint32_t o : neighbours[b])
+        if (inside(scene.bricks[o], p0) && inside(scene.bricks[o], p1)) {
+          per_brick[b].push_back(seamEdgeHash(key));
+          if (!weld && weld_tolerance > 0.0f && j - i != 2) {
+            rims.push_back({p0, b});
+            rims.push_back({p1, b});
           }
-      }
-      std::sort(per_brick[b].begin(), per_brick[b].end());
-      per_brick[b].erase(std::unique(per_brick[b].begin(), per_brick[b].end()),
-                         per_brick[b].end());
-      per_brick[b].shrink_to_fit();  // held until every brick is read
+          break;
+        }
+      i = j;
     }
+    std::sort(per_brick[b].begin(), per_brick[b].end());
+    per_brick[b].erase(std::unique(per_brick[b].begin(), per_brick[b].end()), per_brick[b].end());
+    per_brick[b].shrink_to_fit();  // held until every brick is read
+  };
+
+  beginStage(progress, "find seams", n);
+  for (uint32_t b = 0; b < n; ++b) {
+    if (!neighbours[b].empty()) readBrick(b, nullptr);
     updateProgress(progress, b + 1);
   }
   endStage(progress);
-  return fromSortedHashes(per_brick);
+  BrickSeams seams;
+  seams.weld_ = CrossBrickWeld::build(std::move(rims), weld_tolerance);
+  rims = {};
+  const std::vector<uint32_t>& moved = seams.weld_.bricksWithMoves();
+  if (!moved.empty()) {
+    beginStage(progress, "weld across bricks", moved.size());
+    for (size_t i = 0; i < moved.size(); ++i) {
+      readBrick(moved[i], &seams.weld_);
+      updateProgress(progress, i + 1);
+    }
+    endStage(progress);
+  }
+  seams.hashes_ = fromSortedHashes(per_brick).hashes_;
+  return seams;
 }
 
 bool BrickSeams::contains(const glm::vec3& a, const glm::vec3& b) const {

@@ -26,6 +26,7 @@
 
 #include <glm/glm.hpp>
 
+#include "cross_brick_weld.h"
 #include "progress.h"
 #include "scene_bricking.h"
 
@@ -47,20 +48,29 @@ std::vector<SeamEdgeKey> edgeKeys(std::span<const glm::vec3> positions,
 
 class BrickSeams {
  public:
-  // The edges found in at least two bricks (the brick DAGs consult it for their open edges). Reads every brick whose
-  // bounds overlap another's once (loadBrick); with one brick there are no seams and nothing is
-  // read.
-  static BrickSeams find(const BrickedScene& scene, Progress* progress = nullptr);
+  // The edges found in at least two bricks (the brick DAGs consult it for their open edges),
+  // after welding the rim vertices of different bricks that lie within `weld_tolerance` of each
+  // other on every axis (cross_brick_weld.h; 0: no weld). Reads every brick whose bounds overlap
+  // another's once (loadBrick), and the bricks the weld moves a second time; with one brick
+  // there are no seams and nothing is read. A brick's DAG must be built from
+  // weldAcrossBricks(mesh).
+  static BrickSeams find(const BrickedScene& scene, float weld_tolerance,
+                         Progress* progress = nullptr);
   // From per-brick unique edge lists directly (tests).
   static BrickSeams fromOpenEdges(std::vector<std::vector<SeamEdgeKey>> per_brick);
 
   bool contains(const glm::vec3& a, const glm::vec3& b) const;
   size_t size() const { return hashes_.size(); }
+  // A brick's positions as the seams were found on: near-coincident rims of different bricks
+  // made one.
+  void weldAcrossBricks(std::span<glm::vec3> positions) const { weld_.apply(positions); }
+  size_t weldedPositions() const { return weld_.movedPositions(); }
 
  private:
   static BrickSeams fromSortedHashes(const std::vector<std::vector<uint64_t>>& per_brick);
 
   std::vector<uint64_t> hashes_;  // of the seam edges' keys, sorted, unique
+  CrossBrickWeld weld_;
 };
 
 }  // namespace tw

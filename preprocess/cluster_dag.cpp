@@ -798,7 +798,7 @@ ClusterDag buildClusterDag(const DagInput& input, const DagOptions& options) {
     if (options.position_step_m > 0.0) {
       GridWeld weld = weldOnPackageGrid(positions, tris, split,
                                         lockedSeamVertices(positions, tris, options),
-                                        options.position_step_m);
+                                        options.position_step_m, options.noise_tolerance_m);
       for (uint32_t& v : tris) v = weld.remap[v];
       positions = std::move(weld.positions);
       dag.stats.grid_welded_vertices = weld.merged_vertices;

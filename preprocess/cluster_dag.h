@@ -140,6 +140,10 @@ struct DagOptions {
   // (grid_weld.h), so that vertices the package will store as one are one vertex in the DAG too.
   // Locked seam vertices (lock_open_boundaries) are left where they are. 0: exact positions.
   double position_step_m = 0.0;
+  // With position_step_m: vertices closer than this on every axis join before the snap (float
+  // noise of the input; grid_weld.h). 0: one base step. The preprocessor passes the base step plus
+  // two ulps of the largest coordinate the readers stored, as for the weld across bricks.
+  double noise_tolerance_m = 0.0;
 };
 
 constexpr uint32_t kNoGroup = std::numeric_limits<uint32_t>::max();

@@ -44,7 +44,8 @@ uint32_t clusterPositionShift(std::span<const glm::vec3> positions, double posit
 
 GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
                            std::span<const uint32_t> indices, const TriangleClusters& clusters,
-                           std::span<const uint8_t> keep, double position_step_m) {
+                           std::span<const uint8_t> keep, double position_step_m,
+                           double noise_tolerance_m) {
   if (!keep.empty() && keep.size() != positions.size())
     throw std::invalid_argument("weldOnPackageGrid: keep must be empty or one per position");
   for (uint32_t v : indices)
@@ -71,11 +72,12 @@ GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
       }
   }
 
-  // 1. Vertices closer than one base step (float noise: a pipe's end and its elbow's, a ulp
-  // apart, which a pointwise snap can still round apart) join the earliest vertex within that
-  // distance per axis that has not joined another; seam vertices never move, so they never join.
-  // Joining a representative, not a chain, bounds every move by one step.
-  const double tolerance = position_step_m;
+  // 1. Vertices closer than the noise tolerance (float noise: a pipe's end and its elbow's, a ulp
+  // apart, which a pointwise snap can still round apart; an ulp of a world coordinate of 290 m is
+  // two base steps) join the earliest vertex within that distance per axis that has not joined
+  // another; seam vertices never move, so they never join. Joining a representative, not a
+  // chain, bounds every move by the tolerance.
+  const double tolerance = noise_tolerance_m > 0.0 ? noise_tolerance_m : position_step_m;
   std::vector<uint32_t> representative(positions.size());
   for (size_t v = 0; v < positions.size(); ++v) representative[v] = uint32_t(v);
   std::vector<uint32_t> used;

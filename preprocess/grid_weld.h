@@ -35,7 +35,8 @@ uint32_t clusterPositionShift(std::span<const glm::vec3> positions, double posit
                               uint32_t min_shift = 0);
 
 // Welds every vertex used by `clusters` (triangles of `indices`, three per triangle, into
-// `positions`): first, a vertex within one base step (per axis) of an earlier vertex joins it
+// `positions`): first, a vertex within `noise_tolerance_m` (per axis; <= 0: one base step) of an
+// earlier vertex joins it
 // (float noise that a pointwise grid could round apart; joining the first one in reach, never a
 // chain, bounds the move); then each such vertex is snapped to the grid of the coarsest shift
 // among the clusters of the vertices it stands for, and equal positions are welded. Vertices
@@ -44,6 +45,7 @@ uint32_t clusterPositionShift(std::span<const glm::vec3> positions, double posit
 // Throws std::invalid_argument when an index is out of range or `keep` has the wrong size.
 GridWeld weldOnPackageGrid(std::span<const glm::vec3> positions,
                            std::span<const uint32_t> indices, const TriangleClusters& clusters,
-                           std::span<const uint8_t> keep, double position_step_m);
+                           std::span<const uint8_t> keep, double position_step_m,
+                           double noise_tolerance_m = 0.0);
 
 }  // namespace tw

@@ -8,6 +8,7 @@
 #include <cstring>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <limits>
 #include <memory>
@@ -204,6 +205,7 @@ class PreprocessRun {
 
   void brickInputs();
   void findSeams();
+  float inputNoiseTolerance() const;
   void buildBricks();
   void mergeUpperLevels();
   void pack();
@@ -349,6 +351,17 @@ void PreprocessRun::brickInputs() {
   report_.bricks = static_cast<uint32_t>(scene_.bricks.size());
 }
 
+// How far apart two copies of one vertex may be and still be one, across bricks
+// (cross_brick_weld.h) and inside one (grid_weld.h): the base step (bricking's grid) plus two
+// float steps of the largest coordinate the readers stored, since a CAD export's noise is an ulp
+// of the coordinates it wrote (at 290 m, 3e-5 m: two base steps), neither of the package's
+// origin-relative ones nor of a placement's far origin (BrickedScene::stored_coordinate_extent).
+float PreprocessRun::inputNoiseTolerance() const {
+  const float stored = float(scene_.stored_coordinate_extent);
+  const double ulp = double(std::nextafter(stored, INFINITY)) - double(stored);
+  return float(storage_.position_step_m + 2.0 * ulp);
+}
+
 // 2a. The seams between bricks, locked in every brick's build so neighbouring bricks never
 // crack. Only the true seams are locked: the model's own open edges (uncapped pipes, sheets) stay
 // free to simplify and drop, as in a one-brick build, which needs no locking at all.
@@ -356,8 +369,9 @@ void PreprocessRun::findSeams() {
   brick_options_ = dag_options_;
   if (scene_.bricks.size() <= 1) return;
   clock_.start("seams");
-  seams_ = BrickSeams::find(scene_, progress_);
+  seams_ = BrickSeams::find(scene_, inputNoiseTolerance(), progress_);
   report_.seam_edges = seams_.size();
+  report_.welded_across_bricks = seams_.weldedPositions();
   brick_options_.lock_open_boundaries = true;
   brick_options_.is_seam_edge = [this](const glm::vec3& a, const glm::vec3& b) {
     return seams_.contains(a, b);
@@ -397,6 +411,7 @@ void PreprocessRun::buildBricks() {
   clock_.start("build bricks");
   beginStage(progress_, "build bricks", scene_.bricks.size());
   brick_options_.position_step_m = storage_.position_step_m;
+  brick_options_.noise_tolerance_m = inputNoiseTolerance();
   const uint64_t resident_limit = options_.memory_budget_bytes / 8;
   bricks_.resize(scene_.bricks.size());
   resident_.resize(scene_.bricks.size());
@@ -410,6 +425,7 @@ void PreprocessRun::buildBricks() {
       ++report_.bricks_reused;
     } else {
       BrickMesh mesh = loadBrick(scene_, b);
+      seams_.weldAcrossBricks(mesh.positions);
       dag = buildClusterDag(DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids},
                             optionsForBrick(b));
       mesh = BrickMesh{};

@@ -90,6 +90,7 @@ struct PreprocessReport {
   uint32_t bricks = 0;
   uint32_t bricks_reused = 0;     // taken from the resume store
   uint64_t seam_edges = 0;        // edges open in two bricks, locked in both brick DAGs
+  uint64_t welded_across_bricks = 0;  // rim positions moved onto another brick's (cross_brick_weld.h)
   bool bricking_reused = false;
   std::vector<uint64_t> triangles_per_level;
   uint64_t root_triangles = 0;

@@ -452,6 +452,7 @@ class BrickingSink : public SceneSink {
     uint32_t dense = 0;
     uint64_t repeated = 0, turned = 0;
     bool solid = false;
+    double stored_extent = 0.0;        // largest coordinate as the reader stored it (scaled)
     std::vector<glm::dvec3> relative;  // positions relative to the scene origin, on the step
   };
   static constexpr uint64_t kPendingTriangles = 1 << 18;
@@ -499,7 +500,11 @@ class BrickingSink : public SceneSink {
     const double step = options_.position_step_m;
     for (size_t i = 0; i < piece.mesh.positions.size(); ++i) {
       glm::dvec3& r = piece.relative[i];
-      r = piece.t.apply(piece.mesh.positions[i]) - scene_.origin;
+      const glm::dvec3 placed = piece.t.apply(piece.mesh.positions[i]);
+      const glm::dvec3 stored = glm::abs(placed - piece.t.origin);
+      if (std::isfinite(stored.x + stored.y + stored.z))
+        piece.stored_extent = std::max({piece.stored_extent, stored.x, stored.y, stored.z});
+      r = placed - scene_.origin;
       if (step > 0.0 && std::isfinite(r.x + r.y + r.z)) r = glm::round(r / step) * step;
     }
   }
@@ -507,6 +512,7 @@ class BrickingSink : public SceneSink {
   void addMesh(const PendingMesh& piece) {
     scene_.triangles_repeated += piece.repeated;
     scene_.triangles_turned += piece.turned;
+    scene_.stored_coordinate_extent = std::max(scene_.stored_coordinate_extent, piece.stored_extent);
     uint32_t& surface = object_bounds_[piece.dense].surface;
     if (surface != kOpenSurface) surface = piece.solid ? kClosedSurface : kOpenSurface;
     const TriangleMesh& mesh = piece.mesh;

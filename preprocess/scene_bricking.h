@@ -131,6 +131,11 @@ struct BrickedScene {
   uint64_t triangle_count = 0;  // sum over bricks
   uint64_t triangles_turned = 0;  // wound against their piece, reversed (consistent_winding.h)
   uint64_t triangles_repeated = 0;  // exact copies of another, dropped (repeated_triangles.h)
+  // The largest vertex coordinate as the readers stored it, in metres: its distance from its
+  // object's placement origin along an axis. A CAD export's noise is a float step of this (a
+  // PLY written at 290 m is noisy at 3e-5 m), not of the world position (a part placed 7,000 km
+  // from the world origin with small local coordinates is exact to micrometres).
+  double stored_coordinate_extent = 0.0;
   BrickingStats stats;
 };
 

@@ -67,6 +67,23 @@ TEST(GridWeld, WeldsNoisyCopiesOnBothSidesOfAGridBoundary) {
   EXPECT_NE(weld.remap[2], weld.remap[5]);
 }
 
+// An exporter's noise is an ulp of the world coordinate it wrote: at 288.75 m that is two base
+// steps, which one step of tolerance leaves apart (the 100M plant's pipe joints) and the noise
+// tolerance joins.
+TEST(GridWeld, NoiseToleranceJoinsCopiesTwoStepsApart) {
+  const float x = float(5816322 * kStep), x_noisy = float(5816324 * kStep);
+  std::vector<glm::vec3> positions = {{x, 0, 0}, {x, 1, 0}, {x - 1, 0, 0},
+                                      {x_noisy, 0, 0}, {x_noisy, 1, 0}, {x + 1, 0, 0}};
+  std::vector<uint32_t> indices = {0, 1, 2, 3, 5, 4};
+  const GridWeld apart = weldOnPackageGrid(positions, indices, oneClusterPerTriangle(2), {}, kStep);
+  EXPECT_NE(apart.remap[0], apart.remap[3]);
+  const GridWeld joined =
+      weldOnPackageGrid(positions, indices, oneClusterPerTriangle(2), {}, kStep, 3 * kStep);
+  EXPECT_EQ(joined.remap[0], joined.remap[3]);
+  EXPECT_EQ(joined.remap[1], joined.remap[4]);
+  EXPECT_EQ(joined.merged_vertices, 2u);
+}
+
 TEST(GridWeld, KeepsVerticesFartherApartThanAStep) {
   std::vector<glm::vec3> positions = {{0, 0, 0}, {float(3 * kStep), 0, 0}, {0, 0.2f, 0}};
   std::vector<uint32_t> indices = {0, 1, 2};

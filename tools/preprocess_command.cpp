@@ -62,6 +62,11 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
               static_cast<unsigned long long>(r.objects));
   std::printf("  bricks      %u (%u reused%s)\n", r.bricks, r.bricks_reused,
               r.bricking_reused ? ", bricking reused" : "");
+  if (r.bricks > 1)
+    std::printf("  seams       %llu edges locked in both bricks, %llu rim positions welded onto "
+                "another brick's\n",
+                static_cast<unsigned long long>(r.seam_edges),
+                static_cast<unsigned long long>(r.welded_across_bricks));
   std::printf("  levels      %zu:", r.triangles_per_level.size());
   for (uint64_t t : r.triangles_per_level) std::printf(" %llu", static_cast<unsigned long long>(t));
   std::printf(" triangles (root %llu)\n", static_cast<unsigned long long>(r.root_triangles));
