@@ -99,7 +99,9 @@ class ObjParser {
         positions_(share(options, 4), options.spill_dir),
         normals_(share(options, 3), options.spill_dir),
         colors_(share(options, 1), options.spill_dir),
-        remap_(size_t{max_part_triangles_} * 3) {
+        // A part never holds more distinct vertices than the file has references ("1 " at
+        // least), so a small file gets a small table, not one sized for a million triangles.
+        remap_(std::min<uint64_t>(uint64_t{max_part_triangles_} * 3, in_.size() / 2 + 16)) {
     part_.geometry = TriangleMesh{};
     mesh_ = &std::get<TriangleMesh>(part_.geometry);
     object_name_ = stem_;

@@ -40,6 +40,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <csignal>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -513,6 +514,11 @@ Translation translateInChild(const std::filesystem::path& path, const ReadOption
   }
   if (child == 0) {
     ::close(fds[0]);
+    // A crash inside OpenCASCADE is this child's expected way to fail: let it die of the signal,
+    // which the parent turns into the error below, rather than run a handler a sanitizer or a
+    // fuzzer installed in the parent (it would report the crash as its own and write files).
+    std::signal(SIGSEGV, SIG_DFL);
+    std::signal(SIGBUS, SIG_DFL);
     translate(path, scene->path(), options, fds[1]);
     ::close(fds[1]);
     ::_exit(0);
