@@ -1,0 +1,8 @@
+// Fuzz target: the binary glTF (GLB) reader.
+#include "fuzz_input.h"
+
+using namespace tw::fuzz;
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  return readAsScene(writeFile("model.glb", all(data, size)));
+}
