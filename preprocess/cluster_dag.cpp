@@ -12,6 +12,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "cluster_grouping.h"
 #include "clusterize.h"
@@ -149,6 +150,10 @@ struct GroupOutcome {
   // positions.size() + j, positions being the level's; the caller renumbers them when it appends.
   std::vector<glm::vec3> new_positions;
   std::vector<WorkCluster> clusters;
+  // The same clusters as package clusters (makeCluster), made here so that the level's groups
+  // make them in parallel; level, group, error and LOD bounds are set when the level is put
+  // together.
+  std::vector<DagCluster> made;
   float error = 0.0f;  // absolute simplification error, before taking the children's into account
   GroupMethod method = GroupMethod::PassThrough;
   uint64_t triangles = 0;
@@ -536,16 +541,24 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   TriangleClusters split =
       clusterizeTrianglesByObject(lpos, best.tris, best.ids, options.cluster_size);
   outcome.clusters.resize(split.clusterCount());
+  outcome.made.reserve(split.clusterCount());
+  std::vector<uint32_t> local_tris, slot(lpos.size(), kUnowned);
   for (size_t c = 0; c < split.clusterCount(); ++c) {
     WorkCluster& wc = outcome.clusters[c];
     const uint32_t first = split.offsets[c], last = split.offsets[c + 1];
     wc.tris.reserve(3 * size_t(last - first));
     wc.ids.reserve(last - first);
+    local_tris.clear();
     for (uint32_t i = first; i < last; ++i) {
       uint32_t t = split.triangles[i];
-      for (int k = 0; k < 3; ++k) wc.tris.push_back(toGlobal(best.tris[3 * t + k]));
+      for (int k = 0; k < 3; ++k) {
+        local_tris.push_back(best.tris[3 * t + k]);
+        wc.tris.push_back(toGlobal(best.tris[3 * t + k]));
+      }
       wc.ids.push_back(best.ids[t]);
     }
+    // Local and global numbering list the same positions in the same order of first use.
+    outcome.made.push_back(makeCluster(lpos, local_tris, wc.ids, slot));
   }
   return outcome;
 }
@@ -653,7 +666,7 @@ bool mergeFailedGroupsWithNeighbours(const std::vector<WorkCluster>& work,
     for (uint32_t m : groups[g])
       for (uint32_t v : work[m].tris)
         if (vertex_owner[v] == kMulti) vertex_group.emplace_back(v, g);
-  std::sort(vertex_group.begin(), vertex_group.end());
+  tbb::parallel_sort(vertex_group.begin(), vertex_group.end());
   vertex_group.erase(std::unique(vertex_group.begin(), vertex_group.end()), vertex_group.end());
   // Each failed group, in order, takes its neighbours that no earlier one took. Not transitive:
   // on a connected model the failed groups' neighbourhoods chain into one group of most of the
@@ -955,7 +968,7 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
               edge_group.emplace_back(edgeKey(a, b), g);
             }
         }
-      std::sort(edge_group.begin(), edge_group.end());
+      tbb::parallel_sort(edge_group.begin(), edge_group.end());
       std::vector<uint64_t> shared_edges;
       for (size_t i = 0; i < edge_group.size();) {
         size_t j = i + 1;
@@ -1096,11 +1109,8 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         slot.resize(grown_positions.size(), kUnowned);
         if (!open_vertex.empty()) open_vertex.resize(grown_positions.size(), 0);
       }
-      std::vector<DagCluster> made;
-      for (WorkCluster& wc : o.clusters) {
-        made.push_back(makeCluster(*all_positions, wc.tris, wc.ids, slot));
-        spheres.push_back({made.back().sphere_center, made.back().sphere_radius});
-      }
+      std::vector<DagCluster>& made = o.made;
+      for (const DagCluster& dc : made) spheres.push_back({dc.sphere_center, dc.sphere_radius});
       BoundSphere bound = enclose(spheres);
       group.sphere_center = bound.center;
       group.sphere_radius = bound.radius;

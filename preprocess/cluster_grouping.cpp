@@ -117,6 +117,8 @@ std::vector<std::vector<uint32_t>> groupClusters(
   for (size_t c = 0; c < n; ++c) vwgt[c] = std::max<idx_t>(1, idx_t(cluster_tris[c].size() / 3));
 
   idx_t nvtxs = idx_t(n), ncon = 1, nparts = idx_t((n + group_size - 1) / group_size), edgecut = 0;
+  // METIS keeps its random generator in global state (GKlib), so calls must not run at the same
+  // time: grouping sets in parallel made packages differ from run to run.
   idx_t metis_options[METIS_NOPTIONS];
   METIS_SetDefaultOptions(metis_options);
   metis_options[METIS_OPTION_SEED] = 42;

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <array>
 
+#include <tbb/parallel_sort.h>
+
 #include "exact_weld.h"
 
 namespace tw {
@@ -25,7 +27,7 @@ RotatedTriangle rotated(uint32_t a, uint32_t b, uint32_t c, uint32_t triangle) {
 
 // The triangles of `keys` whose vertex triple equals an earlier one's, increasing.
 std::vector<uint32_t> repeatsOf(std::vector<RotatedTriangle>& keys) {
-  std::sort(keys.begin(), keys.end());
+  tbb::parallel_sort(keys.begin(), keys.end());
   std::vector<uint32_t> repeats;
   for (size_t i = 1; i < keys.size(); ++i)
     if (keys[i].v == keys[i - 1].v) repeats.push_back(keys[i].triangle);

@@ -92,7 +92,7 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
               static_cast<unsigned long long>(r.sealed_run_closers));
   std::printf("  box faces   %llu covered by another box's face\n",
               static_cast<unsigned long long>(r.covered_box_faces));
-  for (const StageTime& s : r.stages) std::printf("  %-12s%8.2f s\n", s.name.c_str(), s.seconds);
+  for (const StageTime& s : r.stages) std::printf("  %-12s%9.3f s\n", s.name.c_str(), s.seconds);
   std::printf("  total       %8.2f s, %.2f M input triangles/s\n", r.seconds,
               r.seconds > 0 ? double(r.input_triangles) / r.seconds / 1e6 : 0.0);
   if (r.visibility.ran) {
