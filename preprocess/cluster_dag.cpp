@@ -307,7 +307,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     for (uint32_t v = 0; v < vcount; ++v)
       if (isPinned(v)) roles[v] = kLockedVertex;
     markRimVertices(ltris, roles);
-    VertexClusteringResult merged = simplifyByLockedVertexClustering(lpos, ltris, roles, n / 2);
+    VertexClusteringResult merged = simplifyByLockedVertexClustering(lpos, ltris, roles, n / 2, limit);
     std::vector<uint8_t> locked(vcount);
     for (uint32_t v = 0; v < vcount; ++v) locked[v] = (roles[v] & kLockedVertex) != 0;
     if (merged.tris.size() < best.tris.size() && !merged.tris.empty()) {

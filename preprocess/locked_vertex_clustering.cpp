@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
 
 #include "edge_counts.h"
 
@@ -69,11 +70,13 @@ Grid gridOver(std::span<const glm::vec3> positions, std::span<const uint32_t> tr
   return {lo, std::max({size.x, size.y, size.z, 1e-30f})};
 }
 
-// One key per vertex: its cell at `cells` per axis, or a cell of its own when locked.
+// One key per vertex: its cell of a grid of `cells` cubes along the longest axis (a fraction of
+// a cube may be left over), or a cell of its own when locked.
 void cellKeys(std::span<const glm::vec3> positions, std::span<const uint8_t> roles,
-              const Grid& grid, uint32_t cells, std::vector<uint64_t>& keys) {
+              const Grid& grid, double cells, std::vector<uint64_t>& keys) {
   keys.resize(positions.size());
-  const float scale = float(cells) / grid.extent;
+  const float scale = float(cells / double(grid.extent));
+  const float last = float(std::ceil(cells) - 1.0);
   for (size_t v = 0; v < positions.size(); ++v) {
     if (roles[v] & kLockedVertex) {
       keys[v] = kLockedCell | v;
@@ -82,7 +85,7 @@ void cellKeys(std::span<const glm::vec3> positions, std::span<const uint8_t> rol
     uint64_t key = 0;
     for (int k = 0; k < 3; ++k) {
       const float cell = std::floor((positions[v][k] - grid.origin[k]) * scale);
-      const uint64_t i = uint64_t(std::clamp(cell, 0.0f, float(cells - 1)));
+      const uint64_t i = uint64_t(std::clamp(cell, 0.0f, last));
       key = (key << 21) | i;
     }
     keys[v] = (roles[v] & kRimVertex) ? key | kRimCell : key;
@@ -189,13 +192,15 @@ void remapTriangles(std::span<const uint32_t> tris, const std::vector<uint32_t>&
 VertexClusteringResult simplifyByLockedVertexClustering(std::span<const glm::vec3> positions,
                                                         std::span<const uint32_t> tris,
                                                         std::span<const uint8_t> roles,
-                                                        size_t target_triangles) {
+                                                        size_t target_triangles,
+                                                        size_t most_triangles) {
   VertexClusteringResult out;
   if (tris.empty()) return out;
+  most_triangles = std::max(most_triangles, target_triangles);
   const Grid grid = gridOver(positions, tris);
 
-  // The largest grid whose surviving triangle count is within the target (the count grows,
-  // roughly, with the grid); the coarsest grid when none is.
+  // A binary search over whole cell counts finds the largest grid whose surviving triangles are
+  // within the target (the count grows, roughly, with the grid).
   std::vector<uint64_t> keys;
   uint32_t lo = 1, hi = kMaxGridCells;
   uint32_t best = 1;
@@ -209,12 +214,45 @@ VertexClusteringResult simplifyByLockedVertexClustering(std::span<const glm::vec
       hi = mid - 1;
     }
   }
-  cellKeys(positions, roles, grid, best, keys);
-  out.grid_cells = best;
-
-  const std::vector<uint32_t> rep = cellRepresentatives(positions, vertexQuadrics(positions, tris), keys);
-  remapTriangles(tris, rep, roles, out);
-  for (uint32_t v : tris) out.error = std::max(out.error, glm::length(positions[v] - positions[rep[v]]));
+  const std::vector<Quadric> quadrics = vertexQuadrics(positions, tris);
+  auto clusterAt = [&](double cells) {
+    VertexClusteringResult result;
+    cellKeys(positions, roles, grid, cells, keys);
+    result.grid_cells = cells;
+    const std::vector<uint32_t> rep = cellRepresentatives(positions, quadrics, keys);
+    remapTriangles(tris, rep, roles, result);
+    for (uint32_t v : tris)
+      result.error = std::max(result.error, glm::length(positions[v] - positions[rep[v]]));
+    return result;
+  };
+  out = clusterAt(best);
+  // A coarse grid moves in large steps, though (5 to 6 cells along the longest axis can double
+  // the survivors), and on thin parts many survivors cancel (a tube flattened into two opposite
+  // sheets): below kRefinedBelow cells the sizes between the search's grid and one more cell are
+  // tried in sixteenths, and the result taken is the one whose triangles are nearest the target
+  // without passing most_triangles (of equal distances, the finer grid). A coarse group then
+  // comes down near its target, not far below it.
+  // Only a result well short of its target is refined, until it is no longer; only grids whose
+  // survivors (an upper bound of what remains) exceed what it kept are clustered.
+  constexpr uint32_t kRefinedBelow = 64;
+  constexpr int kSteps = 16;
+  constexpr double kShortOfTarget = 0.8;
+  auto count = [](const VertexClusteringResult& r) { return r.tris.size() / 3; };
+  if (best < kRefinedBelow && double(count(out)) < kShortOfTarget * double(target_triangles)) {
+    auto distance = [&](const VertexClusteringResult& r) {
+      const size_t n = count(r);
+      return n > target_triangles ? n - target_triangles : target_triangles - n;
+    };
+    for (int step = 1; step < kSteps; ++step) {
+      const double cells = best + double(step) / kSteps;
+      cellKeys(positions, roles, grid, cells, keys);
+      if (survivingTriangles(tris, keys) <= count(out)) continue;
+      VertexClusteringResult finer = clusterAt(cells);
+      if (count(finer) <= most_triangles && distance(finer) <= distance(out))
+        out = std::move(finer);
+      if (double(count(out)) >= kShortOfTarget * double(target_triangles)) break;
+    }
+  }
   return out;
 }
 

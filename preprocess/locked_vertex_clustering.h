@@ -32,19 +32,21 @@ struct VertexClusteringResult {
   std::vector<uint32_t> tris;             // three per triangle, into the input positions
   std::vector<uint32_t> source_triangle;  // per output triangle: the input triangle it came from
   float error = 0.0f;                     // largest vertex displacement
-  uint32_t grid_cells = 0;                // cells along the longest axis of the chosen grid
+  double grid_cells = 0.0;                // cells along the longest axis of the chosen grid
 };
 
 // Per vertex, bit flags: kRimVertex (on an unbalanced edge: merges only with other rim vertices),
 // kLockedVertex (never moves, nothing merges onto it). 0: free.
 enum VertexRole : uint8_t { kFreeVertex = 0, kRimVertex = 1, kLockedVertex = 2 };
 
-// Simplifies `tris` (indices into positions) to at most target_triangles where the locked
-// vertices allow, else to the fewest the coarsest grid gives. roles: one per position.
+// Simplifies `tris` (indices into positions) to the count nearest target_triangles that does not
+// pass most_triangles (< target_triangles: taken as target_triangles) where the locked vertices
+// allow, else to the fewest the coarsest grid gives. roles: one per position.
 VertexClusteringResult simplifyByLockedVertexClustering(std::span<const glm::vec3> positions,
                                                         std::span<const uint32_t> tris,
                                                         std::span<const uint8_t> roles,
-                                                        size_t target_triangles);
+                                                        size_t target_triangles,
+                                                        size_t most_triangles = 0);
 
 // Adds kRimVertex to both vertices of every edge whose uses in one direction do not match its
 // uses in the other (open edges, odd non-manifold edges, the group's own border).

@@ -41,7 +41,7 @@ using Clock = std::chrono::steady_clock;
 
 // Bumped whenever the preprocessor's output changes for the same inputs and options, so that a
 // resume never mixes bricks built by two versions.
-constexpr uint32_t kPreprocessorRevision = 3;
+constexpr uint32_t kPreprocessorRevision = 4;  // 4: bricks stop at a common level
 
 uint64_t peakRssBytes() {
   rusage usage{};
@@ -206,6 +206,7 @@ class PreprocessRun {
   void brickInputs();
   void findSeams();
   float inputNoiseTolerance() const;
+  uint32_t brickStopLevel() const;
   void buildBricks();
   void mergeUpperLevels();
   void pack();
@@ -376,6 +377,30 @@ void PreprocessRun::findSeams() {
   brick_options_.is_seam_edge = [this](const glm::vec3& a, const glm::vec3& b) {
     return seams_.contains(a, b);
   };
+  report_.brick_stop_level = brickStopLevel();
+  brick_options_.max_levels = report_.brick_stop_level + 1;
+}
+
+// 2b. The level every brick's DAG stops at, where the merge takes over: the first at which the
+// bricks' fronts, halving from their triangle counts, fit half a brick together.
+//
+// Why a common level: bricks left to run until their locked seams stop them end at different
+// levels (on the 10M plant mesh, 6 to 9), and a brick that stops early keeps its root unchanged
+// in every front up to the merge, so those fronts hardly shrink (0.84 to 1.0 of the front
+// below). Stopping them all at one level hands the merge one front of equal depth, which it
+// simplifies without seams, halving as a one-brick build does. Half a brick bounds the front
+// held for the merge (and the merge's own build) by what one brick build already takes, however
+// large the model. A brick whose seams stop it below that level still leaves a step there.
+uint32_t PreprocessRun::brickStopLevel() const {
+  uint64_t triangles = 0;
+  for (const BrickInfo& brick : scene_.bricks) triangles += brick.triangle_count;
+  const uint64_t front_limit = std::max<uint64_t>(scene_.max_brick_triangles / 2, 1);
+  uint32_t level = 0;
+  while (triangles > front_limit && level + 2 < dag_options_.max_levels) {
+    triangles /= 2;
+    ++level;
+  }
+  return level;
 }
 
 // The DAG options of brick b: the run's, plus (with several bricks) the test for rims lying
@@ -403,7 +428,7 @@ DagOptions PreprocessRun::optionsForBrick(uint32_t b) const {
   return options;
 }
 
-// 2b. One LOD DAG per brick. A finished brick goes to the resume store; memory keeps its roots
+// 2c. One LOD DAG per brick, up to the common stop level. A finished brick goes to the resume store; memory keeps its roots
 // (for the merge) and its quantization shifts (snapping pass 1, solved now while it is in
 // memory). The last brick's DAG stays too when it is within budget / 8, so a one-brick model is
 // never read back.

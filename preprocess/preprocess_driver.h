@@ -95,6 +95,7 @@ struct PreprocessReport {
   std::vector<uint64_t> triangles_per_level;
   uint64_t root_triangles = 0;
   uint64_t merge_front_triangles = 0;  // all bricks' roots, held in memory for the merge
+  uint32_t brick_stop_level = 0;       // the level at which brick DAGs stop (brickStopLevel)
   uint64_t shared_positions = 0;       // seam and root positions in the snapping table
   uint32_t bricks_resolved = 0;        // brick snapping solved again (a re-read each)
   uint64_t clusters = 0;

@@ -8,6 +8,7 @@
 
 #include "brick_cache.h"
 #include "cluster_dag.h"
+#include "dag_levels.h"
 #include "dag_merge.h"
 #include "dag_serialization.h"
 #include "parametrics/instance_flag_marking.h"
@@ -311,59 +312,62 @@ namespace {
 // Uncapped pipes (open at both ends, as CAD exports them) spread over several bricks. Only the
 // brick seams may be locked: if the pipes' own open ends were locked too, no pipe could ever be
 // simplified or dropped and the levels would stall. The package must still be crack-free.
+// 100 pipes 40 m long along X, so every split of the model cuts through them, and 2,500 short
+// open stubs: 252,000 triangles of open CAD parts.
+void writePipesAndStubs(const fs::path& input) {
+  constexpr int kSides = 12, kRings = 80;
+  TwsWriter writer(input);
+  writer.onLayer(0, {"piping", 0xff00aa00u});
+  uint32_t id = 0;
+  for (int gy = 0; gy < 10; ++gy)
+    for (int gz = 0; gz < 10; ++gz) {
+      SceneObject pipe;
+      pipe.info.id = id++;
+      pipe.info.name = "pipe " + std::to_string(pipe.info.id);
+      pipe.info.transform.origin = {0.0, gy * 2.0, gz * 2.0};
+      TriangleMesh mesh;
+      for (int r = 0; r <= kRings; ++r)
+        for (int s = 0; s < kSides; ++s) {
+          const float a = 6.2831853f * s / kSides;
+          mesh.positions.push_back({0.5f * r, 0.2f * std::cos(a), 0.2f * std::sin(a)});
+        }
+      for (int r = 0; r < kRings; ++r)
+        for (int s = 0; s < kSides; ++s) {
+          const uint32_t a = r * kSides + s, b = r * kSides + (s + 1) % kSides;
+          const uint32_t c = a + kSides, d = b + kSides;
+          mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+        }
+      pipe.geometry = std::move(mesh);
+      writer.onObject(pipe);
+    }
+  // And 2,500 short stubs (one ring of quads): every vertex on an open end, so a build that
+  // locked the model's own open edges could never touch them.
+  for (int gx = 0; gx < 50; ++gx)
+    for (int gy = 0; gy < 50; ++gy) {
+      SceneObject stub;
+      stub.info.id = id++;
+      stub.info.name = "stub " + std::to_string(stub.info.id);
+      stub.info.transform.origin = {gx * 0.8, gy * 0.4, -3.0};
+      TriangleMesh mesh;
+      for (int r = 0; r <= 1; ++r)
+        for (int s = 0; s < kSides; ++s) {
+          const float a = 6.2831853f * s / kSides;
+          mesh.positions.push_back({0.05f * std::cos(a), 0.05f * std::sin(a), 0.1f * r});
+        }
+      for (int s = 0; s < kSides; ++s) {
+        const uint32_t a = s, b = (s + 1) % kSides, c = a + kSides, d = b + kSides;
+        mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
+      }
+      stub.geometry = std::move(mesh);
+      writer.onObject(stub);
+    }
+  writer.finish();
+}
+
 TEST(Preprocess, OpenCadPartsAcrossBricksStillShrinkEveryLevel) {
   fs::path dir = test::scratchDir();
   fs::path input = dir / "pipes.tws";
-  constexpr int kSides = 12, kRings = 80;
-  {
-    TwsWriter writer(input);
-    writer.onLayer(0, {"piping", 0xff00aa00u});
-    uint32_t id = 0;
-    // 100 pipes 40 m long along X, so every split of the model cuts through them.
-    for (int gy = 0; gy < 10; ++gy)
-      for (int gz = 0; gz < 10; ++gz) {
-        SceneObject pipe;
-        pipe.info.id = id++;
-        pipe.info.name = "pipe " + std::to_string(pipe.info.id);
-        pipe.info.transform.origin = {0.0, gy * 2.0, gz * 2.0};
-        TriangleMesh mesh;
-        for (int r = 0; r <= kRings; ++r)
-          for (int s = 0; s < kSides; ++s) {
-            const float a = 6.2831853f * s / kSides;
-            mesh.positions.push_back({0.5f * r, 0.2f * std::cos(a), 0.2f * std::sin(a)});
-          }
-        for (int r = 0; r < kRings; ++r)
-          for (int s = 0; s < kSides; ++s) {
-            const uint32_t a = r * kSides + s, b = r * kSides + (s + 1) % kSides;
-            const uint32_t c = a + kSides, d = b + kSides;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-          }
-        pipe.geometry = std::move(mesh);
-        writer.onObject(pipe);
-      }
-    // And 2,500 short stubs (one ring of quads): every vertex on an open end, so a build that
-    // locked the model's own open edges could never touch them.
-    for (int gx = 0; gx < 50; ++gx)
-      for (int gy = 0; gy < 50; ++gy) {
-        SceneObject stub;
-        stub.info.id = id++;
-        stub.info.name = "stub " + std::to_string(stub.info.id);
-        stub.info.transform.origin = {gx * 0.8, gy * 0.4, -3.0};
-        TriangleMesh mesh;
-        for (int r = 0; r <= 1; ++r)
-          for (int s = 0; s < kSides; ++s) {
-            const float a = 6.2831853f * s / kSides;
-            mesh.positions.push_back({0.05f * std::cos(a), 0.05f * std::sin(a), 0.1f * r});
-          }
-        for (int s = 0; s < kSides; ++s) {
-          const uint32_t a = s, b = (s + 1) % kSides, c = a + kSides, d = b + kSides;
-          mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
-        stub.geometry = std::move(mesh);
-        writer.onObject(stub);
-      }
-    writer.finish();
-  }
+  writePipesAndStubs(input);
   PreprocessOptions options;
   options.inputs = {input};
   options.output = dir / "pipes.twk";
@@ -387,6 +391,38 @@ TEST(Preprocess, OpenCadPartsAcrossBricksStillShrinkEveryLevel) {
   const CheckReport check = checkPackage(view);
   EXPECT_TRUE(check.ok()) << (check.failure ? check.failure->check + ": " + check.failure->what
                                             : std::string("cancelled"));
+}
+
+// Every brick's DAG stops at one level, the first at which the bricks' fronts fit half a brick,
+// and the merge simplifies from there without seams. So the merge's front is the bricks' whole
+// front at that level (no brick root left behind at a lower one), and each front halves across
+// the join as a one-brick build does.
+TEST(Preprocess, BricksStopAtOneLevelAndTheFrontsHalveAcrossTheMerge) {
+  fs::path dir = test::scratchDir();
+  fs::path input = dir / "pipes.tws";
+  writePipesAndStubs(input);
+  PreprocessOptions options;
+  options.inputs = {input};
+  options.output = dir / "pipes.twk";
+  options.max_brick_triangles = 40000;
+  options.cluster_size = 128;
+  const PreprocessReport report = runPreprocess(options);
+  ASSERT_GT(report.bricks, 2u);
+  // 252,000 triangles halve to within 20,000 (half a brick) after four levels.
+  EXPECT_EQ(report.brick_stop_level, 4u);
+  const PackageView view = PackageView::open(options.output, PackageView::Verify::All);
+  const DagLevels levels = dagLevels(view);
+  ASSERT_GT(levels.levels.size(), report.brick_stop_level + 2);
+  EXPECT_EQ(levels.levels[report.brick_stop_level].triangles, report.merge_front_triangles)
+      << "every brick reached the stop level";
+  EXPECT_TRUE(levels.halves);
+  for (size_t l = 1; l < levels.levels.size(); ++l) {
+    if (levels.levels[l - 1].triangles > DagLevels::kHalvingFloor) {
+      EXPECT_LE(levels.levels[l].ratio, DagLevels::kHalvingMax) << "level " << l;
+    }
+  }
+  EXPECT_EQ(levels.root_clusters, 1u);
+  EXPECT_TRUE(levels.errors_monotone);
 }
 
 // CAD exports cut pipe runs into parts (pipe, elbow, pipe...) whose touching ends differ by

@@ -73,8 +73,10 @@ void printSummary(const PreprocessReport& r, const std::string& output) {
   std::printf("  clusters    %llu mesh, %llu parametric (%u sorted runs on disk)\n",
               static_cast<unsigned long long>(r.clusters),
               static_cast<unsigned long long>(r.parametric_clusters), r.parametric_sort_runs);
-  std::printf("  bricks held %llu root triangles for the merge, %llu shared positions for snapping\n",
-              static_cast<unsigned long long>(r.merge_front_triangles),
+  std::printf("  bricks held %llu root triangles for the merge",
+              static_cast<unsigned long long>(r.merge_front_triangles));
+  if (r.bricks > 1) std::printf(" (brick DAGs stop at level %u)", r.brick_stop_level);
+  std::printf(", %llu shared positions for snapping\n",
               static_cast<unsigned long long>(r.shared_positions));
   const GroupMethodCounts& g = r.groups_by_method;
   auto count = [&](GroupMethod m) { return static_cast<unsigned long long>(g[size_t(m)]); };
