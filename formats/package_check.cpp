@@ -232,34 +232,36 @@ class Checker {
     return quantizationErrorM(view_.positionStepM(), shift) + options_.position_slack_m;
   }
 
-  // (a) Every checksum, and zero padding, so that any changed byte is caught.
+  // (a) Every checksum, and zero padding, so that any changed byte is caught: the file read again
+  // now, section by section.
   bool checksums() {
-    // PackageView hands out spans into one mapping that starts with the header.
-    const auto* file = reinterpret_cast<const uint8_t*>(&view_.header());
-    const std::span<const uint8_t> bytes(file, view_.fileBytes());
     const pkg::PackageHeader& h = view_.header();
-    beginStage(progress_, "checksums", bytes.size());
+    const uint64_t file_bytes = view_.fileBytes();
+    beginStage(progress_, "checksums", file_bytes);
     uint64_t done = 0;
-    std::span<const pkg::SectionEntry> table(
-        reinterpret_cast<const pkg::SectionEntry*>(file + h.header_bytes), h.section_count);
-    const uint64_t header_sum = packageHeaderChecksum(h, table);
+    std::vector<pkg::SectionEntry> table(h.section_count);
+    view_.readFileBytes(h.header_bytes, table.size() * sizeof(pkg::SectionEntry),
+                        reinterpret_cast<uint8_t*>(table.data()));
+    pkg::PackageHeader file_header{};
+    view_.readFileBytes(0, sizeof(file_header), reinterpret_cast<uint8_t*>(&file_header));
+    const uint64_t header_sum = packageHeaderChecksum(file_header, table);
     ++report_.counts.checksums;
-    if (header_sum != h.header_checksum)
-      return fail(
-          "checksums",
-          "header checksum is " + str(header_sum) + ", header says " + str(h.header_checksum),
-          offsetof(pkg::PackageHeader, header_checksum));
+    if (header_sum != file_header.header_checksum)
+      return fail("checksums",
+                  "header checksum is " + str(header_sum) + ", header says " +
+                      str(file_header.header_checksum),
+                  offsetof(pkg::PackageHeader, header_checksum));
     std::vector<std::pair<uint64_t, uint64_t>> used{
         {0, h.header_bytes + uint64_t{h.section_count} * sizeof(pkg::SectionEntry)}};
     for (uint32_t i = 0; i < table.size(); ++i) {
       const pkg::SectionEntry& e = table[i];
       const uint64_t stored = pkg::storedBytes(e);
-      if (e.offset > bytes.size() || stored > bytes.size() - e.offset)
+      if (e.offset > file_bytes || stored > file_bytes - e.offset)
         return fail("checksums", "section " + str(i) + " runs past the end of the file", e.offset);
       if (stored > 0) used.push_back({e.offset, e.offset + stored});
       // Page data: its pages are checked one by one first, so a failure names the page.
       if (i == static_cast<uint32_t>(SectionType::PageData) && !pageChecksums()) return false;
-      const uint64_t sum = packageSectionChecksum(bytes.subspan(e.offset, stored));
+      const uint64_t sum = view_.fileChecksum(e.offset, stored);
       ++report_.counts.checksums;
       done += stored;
       updateProgress(progress_, done);
@@ -272,13 +274,19 @@ class Checker {
                     e.offset);
     }
     std::sort(used.begin(), used.end());
-    used.push_back({bytes.size(), bytes.size()});
+    used.push_back({file_bytes, file_bytes});
     uint64_t cursor = 0;
+    std::vector<uint8_t> gap;
     for (const auto& [begin, end] : used) {
-      for (uint64_t b = cursor; b < begin; ++b)
-        if (bytes[b] != 0)
-          return fail("checksums", "byte " + str(b) + " lies outside every section but is not zero",
-                      b);
+      if (begin > cursor) {
+        gap.resize(begin - cursor);
+        view_.readFileBytes(cursor, gap.size(), gap.data());
+        for (uint64_t b = 0; b < gap.size(); ++b)
+          if (gap[b] != 0)
+            return fail("checksums",
+                        "byte " + str(cursor + b) + " lies outside every section but is not zero",
+                        cursor + b);
+      }
       cursor = std::max(cursor, end);
     }
     endStage(progress_);
@@ -286,8 +294,9 @@ class Checker {
   }
 
   bool pageChecksums() {
+    std::vector<uint8_t> stored;
     for (uint32_t p = 0; p < pages_.size(); ++p) {
-      const uint64_t sum = packageSectionChecksum(view_.pageStored(p));
+      const uint64_t sum = packageSectionChecksum(view_.pageStored(p, stored));
       ++report_.counts.checksums;
       if (sum != pages_[p].checksum)
         return fail("checksums",

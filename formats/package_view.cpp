@@ -66,27 +66,18 @@ uint64_t packageSectionChecksum(std::span<const uint8_t> bytes) {
 PackageView PackageView::open(const std::filesystem::path& path, Verify verify) {
   PackageView view;
   view.name_ = path.string();
-  int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) throw FormatError(view.name_, std::string("cannot open: ") + std::strerror(errno));
+  view.fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (view.fd_ < 0)
+    throw FormatError(view.name_, std::string("cannot open: ") + std::strerror(errno));
   struct stat st {};
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    throw FormatError(view.name_, "not a regular file");
-  }
+  if (::fstat(view.fd_, &st) != 0 || !S_ISREG(st.st_mode))
+    throw FormatError(view.name_, "not a regular file");  // ~PackageView closes the file
   view.size_ = static_cast<uint64_t>(st.st_size);
-  if (view.size_ < sizeof(PackageHeader)) {
-    ::close(fd);
+  if (view.size_ < sizeof(PackageHeader))
     throw FormatError::atByte(
         view.name_, view.size_,
         "file is too small for a package header (" + str(view.size_) + " bytes)");
-  }
-  void* map = ::mmap(nullptr, view.size_, PROT_READ, MAP_PRIVATE, fd, 0);
-  int map_errno = errno;
-  ::close(fd);
-  if (map == MAP_FAILED)
-    throw FormatError(view.name_, std::string("cannot map: ") + std::strerror(map_errno));
-  view.data_ = static_cast<const uint8_t*>(map);
-  view.validate(verify);  // on throw, ~PackageView unmaps
+  view.validate(verify);
   return view;
 }
 
@@ -96,9 +87,9 @@ PackageView& PackageView::operator=(PackageView&& other) noexcept {
   if (this != &other) {
     release();
     name_ = std::move(other.name_);
-    data_ = std::exchange(other.data_, nullptr);
+    fd_ = std::exchange(other.fd_, -1);
     size_ = std::exchange(other.size_, 0);
-    header_ = std::exchange(other.header_, nullptr);
+    header_ = other.header_;
     sections_ = std::move(other.sections_);
     clusters_ = other.clusters_;
     groups_ = other.groups_;
@@ -110,7 +101,7 @@ PackageView& PackageView::operator=(PackageView&& other) noexcept {
     strings_ = other.strings_;
     visibility_ = other.visibility_;
     visibility_cells_ = std::exchange(other.visibility_cells_, VisibilityView());
-    page_data_ = other.page_data_;
+    stored_ = std::move(other.stored_);
     decompressed_ = std::move(other.decompressed_);
   }
   return *this;
@@ -119,17 +110,38 @@ PackageView& PackageView::operator=(PackageView&& other) noexcept {
 PackageView::~PackageView() { release(); }
 
 void PackageView::release() {
-  if (data_) ::munmap(const_cast<uint8_t*>(data_), size_);
-  data_ = nullptr;
+  if (fd_ >= 0) ::close(fd_);
+  fd_ = -1;
+}
+
+void PackageView::readFileBytes(uint64_t offset, uint64_t bytes, uint8_t* out) const {
+  uint64_t done = 0;
+  while (done < bytes) {
+    const ssize_t n = ::pread(fd_, out + done, size_t(bytes - done), off_t(offset + done));
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0)
+      fail(offset + done, std::string("cannot read: ") + std::strerror(errno));
+    if (n == 0)
+      fail(offset + done, "the file ends here, before the " + str(bytes) + " bytes at byte " +
+                              str(offset) + " (it was truncated after it was opened)");
+    done += uint64_t(n);
+  }
 }
 
 uint64_t PackageView::offsetOf(const void* p) const {
   const auto* byte = static_cast<const uint8_t*>(p);
+  const auto* header = reinterpret_cast<const uint8_t*>(&header_);
+  if (byte >= header && byte < header + sizeof(header_)) return uint64_t(byte - header);
   for (size_t i = 0; i < decompressed_.size(); ++i) {
     const std::vector<uint8_t>& d = decompressed_[i];
     if (!d.empty() && byte >= d.data() && byte < d.data() + d.size()) return sections_[i].offset;
   }
-  return static_cast<uint64_t>(byte - data_);
+  for (size_t i = 0; i < stored_.size(); ++i) {
+    const std::vector<uint8_t>& d = stored_[i];
+    if (!d.empty() && byte >= d.data() && byte < d.data() + d.size())
+      return sections_[i].offset + uint64_t(byte - d.data());
+  }
+  return 0;
 }
 
 void PackageView::fail(uint64_t offset, const std::string& reason) const {
@@ -137,15 +149,16 @@ void PackageView::fail(uint64_t offset, const std::string& reason) const {
 }
 
 glm::dvec3 PackageView::origin() const {
-  return glm::dvec3(header_->origin[0], header_->origin[1], header_->origin[2]);
+  return glm::dvec3(header_.origin[0], header_.origin[1], header_.origin[2]);
 }
 
 // Open-time validation, in the order each step needs the one before: the header and section
 // table, the sections' checksums, the compressed tables, then every record and reference.
 void PackageView::validate(Verify verify) {
-  header_ = reinterpret_cast<const PackageHeader*>(data_);
+  readFileBytes(0, sizeof(PackageHeader), reinterpret_cast<uint8_t*>(&header_));
   validateHeader();
   validateSectionTable();
+  readSections();
   verifySectionChecksums(verify);
   decompressSections();
   mapSections();
@@ -160,7 +173,7 @@ void PackageView::validate(Verify verify) {
 
 // Identity, record sizes, the section table's extent and checksum, and the header's values.
 void PackageView::validateHeader() {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   auto at = [&](const void* field) { return fieldOffset(h, field); };
 
   // Identity.
@@ -201,8 +214,8 @@ void PackageView::validateHeader() {
     fail(at(&h.section_count), "section count " + str(h.section_count) + " is out of range");
   if (sectionTableEnd() > size_) fail(size_, "section table runs past the end of the file");
   sections_.resize(h.section_count);
-  std::memcpy(sections_.data(), data_ + sizeof(PackageHeader),
-              sections_.size() * sizeof(SectionEntry));
+  readFileBytes(sizeof(PackageHeader), sections_.size() * sizeof(SectionEntry),
+         reinterpret_cast<uint8_t*>(sections_.data()));
   if (packageHeaderChecksum(h, sections_) != h.header_checksum)
     fail(at(&h.header_checksum), "header checksum mismatch (header or section table is corrupt)");
 
@@ -220,12 +233,12 @@ void PackageView::validateHeader() {
 }
 
 uint64_t PackageView::sectionTableEnd() const {
-  return sizeof(PackageHeader) + uint64_t{header_->section_count} * sizeof(SectionEntry);
+  return sizeof(PackageHeader) + uint64_t{header_.section_count} * sizeof(SectionEntry);
 }
 
 // Every entry's type, record size, alignment, extent and count; no two sections overlap.
 void PackageView::validateSectionTable() {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   const uint64_t table_end = sectionTableEnd();
   for (uint32_t i = 0; i < h.section_count; ++i) {
     const SectionEntry& e = sections_[i];
@@ -269,18 +282,55 @@ void PackageView::validateSectionTable() {
   }
 }
 
+// Every section but the page data, read into memory as stored: the view never reads the tables
+// from the file again, so whatever happens to the file after open (truncated, overwritten in
+// place) cannot change a validated record.
+void PackageView::readSections() {
+  stored_.assign(sections_.size(), {});
+  for (uint32_t i = 0; i < sections_.size(); ++i) {
+    if (i == static_cast<uint32_t>(SectionType::PageData)) continue;
+    stored_[i].resize(storedBytes(sections_[i]));
+    readFileBytes(sections_[i].offset, stored_[i].size(), stored_[i].data());
+  }
+}
+
 std::span<const uint8_t> PackageView::storedSection(uint32_t i) const {
-  return std::span<const uint8_t>(data_ + sections_[i].offset, storedBytes(sections_[i]));
+  return std::span<const uint8_t>(stored_[i]);
+}
+
+// XXH3-64 of the file's bytes [offset, offset + bytes), read in chunks.
+uint64_t PackageView::fileChecksum(uint64_t offset, uint64_t bytes) const {
+  if (bytes == 0) return packageSectionChecksum({});
+  XXH3_state_t* state = XXH3_createState();
+  XXH3_64bits_reset(state);
+  std::vector<uint8_t> chunk(std::min<uint64_t>(bytes, uint64_t(4) << 20));
+  try {
+    for (uint64_t done = 0; done < bytes;) {
+      const uint64_t n = std::min<uint64_t>(chunk.size(), bytes - done);
+      readFileBytes(offset + done, n, chunk.data());
+      XXH3_64bits_update(state, chunk.data(), size_t(n));
+      done += n;
+    }
+  } catch (...) {
+    XXH3_freeState(state);
+    throw;
+  }
+  const uint64_t hash = XXH3_64bits_digest(state);
+  XXH3_freeState(state);
+  return hash;
 }
 
 // The page data and unknown sections are checked only by a full verification (docs/verify.md).
 void PackageView::verifySectionChecksums(Verify verify) const {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   for (uint32_t i = 0; i < h.section_count; ++i) {
     if (i == static_cast<uint32_t>(SectionType::PageData) && verify != Verify::All) continue;
     if (i >= kSectionCount && verify != Verify::All) continue;
     const SectionEntry& e = sections_[i];
-    if (packageSectionChecksum(storedSection(i)) != e.checksum)
+    const uint64_t sum = i == static_cast<uint32_t>(SectionType::PageData)
+                             ? fileChecksum(e.offset, storedBytes(e))
+                             : packageSectionChecksum(storedSection(i));
+    if (sum != e.checksum)
       fail(e.offset, (i < kSectionCount ? std::string(kSectionNames[i]) : "section " + str(i)) +
                          " section checksum mismatch");
   }
@@ -308,10 +358,10 @@ void PackageView::decompressSections() {
 std::span<const uint8_t> PackageView::sectionBytes(SectionType type) const {
   const uint32_t i = static_cast<uint32_t>(type);
   if (sections_[i].stored_bytes != 0) return std::span<const uint8_t>(decompressed_[i]);
-  return std::span<const uint8_t>(data_ + sections_[i].offset, sections_[i].bytes);
+  return std::span<const uint8_t>(stored_[i]);
 }
 
-// The record spans over the mapping (or the decompressed tables).
+// The record spans over the tables read at open (or decompressed).
 void PackageView::mapSections() {
   auto records = [&]<typename T>(SectionType type, std::span<const T>& out) {
     const SectionEntry& e = sections_[static_cast<uint32_t>(type)];
@@ -327,7 +377,6 @@ void PackageView::mapSections() {
   auto strings = sectionBytes(SectionType::Strings);
   strings_ = std::string_view(reinterpret_cast<const char*>(strings.data()), strings.size());
   visibility_ = sectionBytes(SectionType::Visibility);
-  page_data_ = sectionBytes(SectionType::PageData);
 }
 
 // Layers and objects: names and keys inside the string pool, layers in range, known flags.
@@ -337,8 +386,8 @@ void PackageView::validateNamedRecords() const {
       fail(offsetOf(record), std::string(what) + " [" + str(offset) + ", +" + str(bytes) +
                                  ") is not inside the string pool");
   };
-  checkString(&header_->database_path_offset, header_->database_path_offset,
-              header_->database_path_bytes, "database path");
+  checkString(&header_.database_path_offset, header_.database_path_offset,
+              header_.database_path_bytes, "database path");
   for (const LayerRecord& l : layers_) checkString(&l, l.name_offset, l.name_bytes, "layer name");
   for (const ObjectRecord& o : objects_) {
     if (o.layer >= layers_.size())
@@ -354,7 +403,7 @@ void PackageView::validateNamedRecords() const {
 
 // Profile points finite; instances of known types and flags, in range, with valid profiles.
 void PackageView::validateInstances() const {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   for (const glm::vec2& p : profiles_)
     if (!finite(p.x) || !finite(p.y)) fail(offsetOf(&p), "profile point is not finite");
   for (const InstanceRecord& in : instances_) {
@@ -395,14 +444,15 @@ void PackageView::validatePages() const {
       fail(offsetOf(&p.raw_bytes), "page raw size is over the limit");
     if (p.codec == static_cast<uint32_t>(PageCodec::None) && p.stored_bytes != p.raw_bytes)
       fail(offsetOf(&p.stored_bytes), "uncompressed page has stored size != raw size");
-    if (p.offset % kSectionAlignment != 0 || !fits(p.offset, p.stored_bytes, page_data_.size()))
+    if (p.offset % kSectionAlignment != 0 ||
+        !fits(p.offset, p.stored_bytes, sections_[static_cast<uint32_t>(SectionType::PageData)].bytes))
       fail(offsetOf(&p.offset), "page bytes [" + str(p.offset) + ", +" + str(p.stored_bytes) +
                                     ") are not inside the page data section");
   }
 }
 
 void PackageView::validateGroups() const {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   for (const GroupRecord& g : groups_) {
     if (!fits(g.first_cluster, g.cluster_count, clusters_.size()))
       fail(offsetOf(&g.first_cluster), "group cluster range is invalid");
@@ -419,7 +469,7 @@ void PackageView::validateGroups() const {
 // Bounds, errors monotone toward the roots, group links, object ranges, and each kind's own
 // fields: a mesh cluster's bytes inside its page, a parametric cluster's instances of one type.
 void PackageView::validateClusters() const {
-  const PackageHeader& h = *header_;
+  const PackageHeader& h = header_;
   for (size_t c = 0; c < clusters_.size(); ++c) {
     const ClusterRecord& r = clusters_[c];
     const uint64_t at_c = offsetOf(&r);
@@ -500,9 +550,9 @@ void PackageView::validateVisibility() {
   visibility_cells_ = VisibilityView::parse(visibility_, name_, e.offset, clusters_.size());
   if (visibility_cells_.empty()) return;
   const VisibilityHeader& v = visibility_cells_.header();
-  if (v.candidate_level >= header_->level_count)
+  if (v.candidate_level >= header_.level_count)
     fail(offsetOf(&v.candidate_level), "visibility: candidate level " + str(v.candidate_level) +
-                                           " >= level count " + str(header_->level_count));
+                                           " >= level count " + str(header_.level_count));
   // Candidates are mesh clusters (drawn as occluders, mapped through the DAG) and, when the
   // section says so, parametric clusters.
   const bool parametric = (v.flags & kParametricCandidates) != 0;
@@ -535,9 +585,14 @@ void PackageView::verifyAll() {
   std::sort(used.begin(), used.end());
   uint64_t cursor = 0;
   used.push_back({size_, size_});
+  std::vector<uint8_t> gap;
   for (const auto& [begin, end] : used) {
-    for (uint64_t b = cursor; b < begin; ++b)
-      if (data_[b] != 0) fail(b, "padding between sections is not zero");
+    if (begin > cursor) {
+      gap.resize(begin - cursor);
+      readFileBytes(cursor, gap.size(), gap.data());
+      for (uint64_t b = 0; b < gap.size(); ++b)
+        if (gap[b] != 0) fail(cursor + b, "padding between sections is not zero");
+    }
     cursor = std::max(cursor, end);
   }
 
@@ -569,7 +624,7 @@ std::string_view PackageView::objectDbKey(uint32_t object) const {
 }
 
 std::string_view PackageView::databasePath() const {
-  return strings_.substr(header_->database_path_offset, header_->database_path_bytes);
+  return strings_.substr(header_.database_path_offset, header_.database_path_bytes);
 }
 
 std::string_view PackageView::layerName(uint32_t layer) const {
@@ -577,28 +632,37 @@ std::string_view PackageView::layerName(uint32_t layer) const {
   return strings_.substr(l.name_offset, l.name_bytes);
 }
 
-std::span<const uint8_t> PackageView::pageStored(uint32_t page) const {
-  const PageRecord& p = pages_[page];
-  return page_data_.subspan(p.offset, p.stored_bytes);
+uint64_t PackageView::pageFileOffset(uint32_t page) const {
+  return sections_[static_cast<uint32_t>(SectionType::PageData)].offset + pages_[page].offset;
+}
+
+std::span<const uint8_t> PackageView::pageStored(uint32_t page, std::vector<uint8_t>& bytes) const {
+  if (page >= pages_.size()) throw std::out_of_range("PackageView::pageStored: no such page");
+  bytes.resize(pages_[page].stored_bytes);
+  readFileBytes(pageFileOffset(page), bytes.size(), bytes.data());
+  return bytes;
 }
 
 std::span<const uint8_t> PackageView::loadPage(uint32_t page, std::vector<uint8_t>& scratch) const {
   if (page >= pages_.size()) throw std::out_of_range("PackageView::loadPage: no such page");
   const PageRecord& p = pages_[page];
-  std::span<const uint8_t> stored = pageStored(page);
-  const uint64_t at = offsetOf(stored.data());
-  if (packageSectionChecksum(stored) != p.checksum)
+  const uint64_t at = pageFileOffset(page);
+  const bool compressed = p.codec != static_cast<uint32_t>(PageCodec::None);
+  // An uncompressed page is read straight into `scratch`; a compressed one into a buffer of the
+  // calling thread's, then decompressed into `scratch`.
+  thread_local std::vector<uint8_t> compressed_bytes;
+  std::vector<uint8_t>& stored = compressed ? compressed_bytes : scratch;
+  const std::span<const uint8_t> bytes = pageStored(page, stored);
+  if (packageSectionChecksum(bytes) != p.checksum)
     fail(at, "page " + str(page) + " checksum mismatch");
-  if (p.codec == static_cast<uint32_t>(PageCodec::None)) return stored;
-  if (const char* error = decompressPage(stored, p.raw_bytes, scratch))
-    fail(at, "page " + str(page) + ": " + error);
+  if (!compressed) return scratch;
+  const char* error = decompressPage(bytes, p.raw_bytes, scratch);
+  if (compressed_bytes.capacity() > (size_t(16) << 20)) compressed_bytes = {};  // a huge one-off
+  if (error) fail(at, "page " + str(page) + ": " + error);
   return scratch;
 }
 
-void PackageView::readPage(uint32_t page, std::vector<uint8_t>& raw) const {
-  std::span<const uint8_t> bytes = loadPage(page, raw);
-  if (bytes.data() != raw.data()) raw.assign(bytes.begin(), bytes.end());
-}
+void PackageView::readPage(uint32_t page, std::vector<uint8_t>& raw) const { loadPage(page, raw); }
 
 void PackageView::decodeCluster(uint32_t cluster, std::span<const uint8_t> raw_page,
                                 DecodedCluster& out) const {
@@ -611,10 +675,9 @@ void PackageView::decodeCluster(uint32_t cluster, std::span<const uint8_t> raw_p
   const PageRecord& p = pages_[r.page];
   if (raw_page.size() != p.raw_bytes)
     throw std::invalid_argument("PackageView::decodeCluster: raw page has the wrong size");
-  const uint64_t page_at =
-      sections_[static_cast<uint32_t>(SectionType::PageData)].offset + p.offset;
+  const uint64_t page_at = pageFileOffset(r.page);
   DecodeStatus status =
-      tw::decodeCluster(raw_page.subspan(r.page_offset, r.encoded_bytes), header_->position_step_m,
+      tw::decodeCluster(raw_page.subspan(r.page_offset, r.encoded_bytes), header_.position_step_m,
                         static_cast<uint32_t>(objects_.size()), out);
   if (!status.ok())
     fail(page_at, "cluster " + str(cluster) + " at raw byte " + str(r.page_offset + status.offset) +

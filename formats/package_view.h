@@ -1,12 +1,21 @@
-// PackageView: a read-only memory mapping of a .twk package with every record validated.
+// PackageView: a .twk package opened for reading, with every record validated.
 //
-// open() maps the file (POSIX mmap) and checks, before anything is used: magic, version, struct
-// sizes, header checksum, the section table (aligned, inside the file, non-overlapping, sizes
-// matching record counts), the checksum of every table section, and every cross-reference
-// (cluster -> group, page and object range; page -> page data; object -> layer and strings;
-// instance -> object and profile points; layer -> strings) plus the LOD invariants, and the
-// visibility section when there is one (visibility_section.h; its ids must be mesh clusters).
-// After a successful open the spans below are safe to index with any index the records contain.
+// open() reads the header, the section table and every table section into memory and checks,
+// before anything is used: magic, version, struct sizes, header checksum, the section table
+// (aligned, inside the file, non-overlapping, sizes matching record counts), the checksum of every
+// table section, and every cross-reference (cluster -> group, page and object range; page -> page
+// data; object -> layer and strings; instance -> object and profile points; layer -> strings)
+// plus the LOD invariants, and the visibility section when there is one (visibility_section.h;
+// its ids must be mesh clusters). After a successful open the spans below are safe to index with
+// any index the records contain.
+//
+// Copy-on-read, not a mapping: the tables are copies made at open, and each page is read from the
+// open file (pread) when it is loaded, its checksum checked. So a package truncated, overwritten
+// in place or replaced while a viewer has it open never crashes it (a mapping would take SIGBUS on
+// a page past the new end, and could see validated tables change): the tables stay as validated,
+// a page that cannot be read whole, or no longer matches its checksum, is a FormatError at its
+// offset, and a package replaced by a rename (as `preprocess` writes) keeps being read from the
+// file that was opened. docs/reliability.md, "Faults".
 //
 // Verify::Headers (the default) leaves the page data unread, so opening a package of many GB costs
 // a pass over its tables only; each page's checksum is then checked by readPage when it is loaded.
@@ -14,8 +23,9 @@
 // every cluster and compares it with its record, and requires the gaps between sections to be
 // zero, so any changed byte is caught (`terawalk verify` uses it).
 //
-// Every failure throws FormatError::atByte(file, offset, reason). The view owns the mapping; it
-// is move-only, and spans it hands out live as long as it does.
+// Every failure throws FormatError::atByte(file, offset, reason). The view owns the open file and
+// the tables; it is move-only, and spans it hands out live as long as it does. Page reads may run
+// on several threads at once.
 #pragma once
 
 #include <cstdint>
@@ -55,12 +65,12 @@ class PackageView {
 
   const std::string& fileName() const { return name_; }
   uint64_t fileBytes() const { return size_; }
-  const pkg::PackageHeader& header() const { return *header_; }
+  const pkg::PackageHeader& header() const { return header_; }
   const pkg::SectionEntry& section(pkg::SectionType type) const {
     return sections_[static_cast<uint32_t>(type)];
   }
   glm::dvec3 origin() const;
-  double positionStepM() const { return header_->position_step_m; }
+  double positionStepM() const { return header_.position_step_m; }
 
   std::span<const pkg::ClusterRecord> clusters() const { return clusters_; }
   std::span<const pkg::GroupRecord> groups() const { return groups_; }
@@ -83,14 +93,23 @@ class PackageView {
   std::string_view databasePath() const;
   std::string_view layerName(uint32_t layer) const;
 
-  // The stored (possibly compressed) bytes of a page, straight from the mapping.
-  std::span<const uint8_t> pageStored(uint32_t page) const;
-  // Checks the page's checksum, then decompresses it if needed into `raw` (resized to raw_bytes).
-  // Throws FormatError at the page's file offset on a checksum or decompression failure.
+  // The stored (possibly compressed) bytes of a page, read from the file into `bytes`. Throws
+  // FormatError when the file no longer holds them.
+  std::span<const uint8_t> pageStored(uint32_t page, std::vector<uint8_t>& bytes) const;
+  // Reads the page, checks its checksum, then decompresses it if needed into `raw` (resized to
+  // raw_bytes). Throws FormatError at the page's file offset when it cannot be read whole, on a
+  // checksum or on a decompression failure.
   void readPage(uint32_t page, std::vector<uint8_t>& raw) const;
-  // As readPage, without a copy for uncompressed pages: returns the raw bytes, either straight
-  // from the mapping or decompressed into `scratch` (valid until scratch changes).
+  // As readPage, returning the raw bytes, which are in `scratch` (valid until scratch changes).
   std::span<const uint8_t> loadPage(uint32_t page, std::vector<uint8_t>& scratch) const;
+  // The whole section table, as read and validated at open.
+  std::span<const pkg::SectionEntry> sectionTable() const { return sections_; }
+  // Bytes [offset, offset + bytes) of the file, read now into `out` (the package check's pass
+  // over every byte); throws FormatError when the file no longer holds them.
+  void readFileBytes(uint64_t offset, uint64_t bytes, uint8_t* out) const;
+  // XXH3-64 of the file's bytes [offset, offset + bytes), read now in chunks; throws as above.
+  uint64_t fileChecksum(uint64_t offset, uint64_t bytes) const;
+
   // Decodes mesh cluster `cluster` from the raw bytes of its page (from readPage) and checks it
   // against its record. Throws FormatError on any mismatch or decoding failure.
   void decodeCluster(uint32_t cluster, std::span<const uint8_t> raw_page,
@@ -110,20 +129,23 @@ class PackageView {
   void validateGroups() const;
   void validateClusters() const;
   uint64_t sectionTableEnd() const;
+  void readSections();
+  uint64_t pageFileOffset(uint32_t page) const;
   std::span<const uint8_t> storedSection(uint32_t index) const;  // as stored (maybe compressed)
   std::span<const uint8_t> sectionBytes(pkg::SectionType type) const;  // as read
   void verifyAll();
   void validateVisibility();
   [[noreturn]] void fail(uint64_t offset, const std::string& reason) const;
-  // File offset of a byte of a record: inside the mapping, its own offset; inside a section
-  // decompressed at open, the offset of that section's frame (the file has no finer address).
+  // File offset of a byte of the header or of a record: inside a section read as stored, its own
+  // offset; inside a section decompressed at open, the offset of that section's frame (the file
+  // has no finer address).
   uint64_t offsetOf(const void* p) const;
   void release();
 
   std::string name_;
-  const uint8_t* data_ = nullptr;
+  int fd_ = -1;  // open for page reads
   uint64_t size_ = 0;
-  const pkg::PackageHeader* header_ = nullptr;
+  pkg::PackageHeader header_{};
   std::vector<pkg::SectionEntry> sections_;  // copied: the table is small
   std::span<const pkg::ClusterRecord> clusters_;
   std::span<const pkg::GroupRecord> groups_;
@@ -134,10 +156,11 @@ class PackageView {
   std::span<const pkg::LayerRecord> layers_;
   std::string_view strings_;
   std::span<const uint8_t> visibility_;
-  VisibilityView visibility_cells_;  // spans into the mapping, which a move does not relocate
-  std::span<const uint8_t> page_data_;
-  // Sections stored compressed (format 1.2), decompressed at open; empty for the others. The
-  // spans above point into these, and a move keeps the vectors' buffers where they are.
+  VisibilityView visibility_cells_;  // spans into stored_ or decompressed_
+  // Every section but the page data as stored in the file, read at open; and the sections stored
+  // compressed (format 1.2) decompressed at open (empty for the others). The spans above point
+  // into these, and a move keeps the vectors' buffers where they are.
+  std::vector<std::vector<uint8_t>> stored_;
   std::vector<std::vector<uint8_t>> decompressed_;
 };
 

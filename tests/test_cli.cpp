@@ -362,6 +362,26 @@ TEST(Cli, PreprocessOnAFullDiskLeavesNothingBehindAndResumesAfterSpaceIsFreed) {
   EXPECT_EQ(test::readFile(out), test::readFile(reference));
 }
 
+// A read-only output folder (a read-only tmpfs, as root ignores permission bits): preprocess
+// stops before reading its input, naming the folder and the reason, and writes nothing.
+TEST(Cli, PreprocessIntoAReadOnlyFolderStopsAtOnce) {
+  auto file = test::sharedDataDir() / "stanford-bunny.obj";
+  if (!std::filesystem::exists(file)) GTEST_SKIP() << "shared data not present: " << file;
+  auto disk = test::scratchDir() / "read-only";
+  std::filesystem::create_directories(disk);
+  if (test::runShell("mount -t tmpfs -o size=1M,ro tmpfs " + disk.string()).exit_code != 0)
+    GTEST_SKIP() << "mounting a tmpfs needs root (CI runs as root)";
+  struct Unmount {
+    std::string path;
+    ~Unmount() { test::runShell("umount " + path); }
+  } unmount{disk.string()};
+  RunResult r = run("preprocess " + file.string() + " -o " + (disk / "bunny.twk").string());
+  EXPECT_EQ(r.exit_code, 1) << r.output;
+  EXPECT_NE(r.output.find("is not writable: Read-only file system"), std::string::npos) << r.output;
+  EXPECT_EQ(r.output.find("survey"), std::string::npos) << "stopped before reading: " << r.output;
+  EXPECT_TRUE(std::filesystem::is_empty(disk));
+}
+
 // A real MEP model (926 pipes, ducts and fittings; a third of its triangles exact copies): its
 // DAG halves level after level down to one root cluster, and verify says so, in text and JSON.
 TEST(Cli, VerifyReportsThatARealMepModelHalvesToOneRoot) {
@@ -412,6 +432,39 @@ std::filesystem::path bunnyPackageForCli() {
     return out;
   }();
   return path;
+}
+
+// A package cut short while `render` walks it (a copy still being written, a disk that filled):
+// the renderer keeps going on what it has, says which pages it lost, and exits with 1; it is
+// never killed by the file changing under it. Budgets of 2 MiB and eviction after one frame make
+// it read duplex-mep's pages again all along the orbit, so reads come after the cut (on a slow
+// machine the cut may come first, and the open says the file is short; either way, no crash).
+TEST(Cli, RenderSurvivesItsPackageBeingCutShort) {
+  const auto model = test::sharedDataDir() / "duplex-mep.obj";
+  if (!std::filesystem::exists(model)) GTEST_SKIP() << "shared data not present: " << model;
+  auto dir = test::scratchDir();
+  const auto package = dir / "duplex.twk";
+  RunResult pre = run("preprocess -q " + model.string() + " -o " + package.string());
+  ASSERT_EQ(pre.exit_code, 0) << pre.output;
+  const auto cut = std::filesystem::file_size(package) / 3;
+  const RunResult r = test::runShell(
+      "( " + std::string(TW_TERAWALK_EXE) + " -q render " + package.string() +
+      " --orbit 300 --size 640x480 --gpu-budget 2M --host-budget 2M --evict-after 1 --out " +
+      (dir / "out").string() + " > /dev/null & pid=$!; sleep 0.7; truncate -s " +
+      std::to_string(cut) + " " + package.string() + "; wait $pid; echo \"exit=$?\" )");
+  const size_t at = r.output.rfind("exit=");
+  ASSERT_NE(at, std::string::npos) << r.output;
+  const int status = std::stoi(r.output.substr(at + 5));
+  EXPECT_TRUE(status == 0 || status == 1) << "killed or failed: " << r.output;
+  if (status == 1) {
+    const bool lost_pages = r.output.find("was truncated after it was opened") != std::string::npos;
+    const bool too_late = r.output.find("truncated or extended") != std::string::npos;
+    EXPECT_TRUE(lost_pages || too_late) << r.output;
+    if (lost_pages) {
+      EXPECT_NE(r.output.find("duplex.twk"), std::string::npos) << r.output;
+      EXPECT_TRUE(std::filesystem::exists(dir / "out" / "summary.json"));
+    }
+  }
 }
 
 // `render` headless: a generated orbit, its path saved and replayed, stats as CSV and JSON, PNG

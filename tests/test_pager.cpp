@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <random>
@@ -634,6 +635,51 @@ TEST(Pager, FailedPagesAreCountedAndNeverRetried) {
   EXPECT_EQ(stats.pages_resident, pages.size() - 3);
   EXPECT_EQ(stats.host_bytes_used, 0u);
   EXPECT_FALSE(pager.failed(0));
+}
+
+// The package file cut short, then overwritten in place, while the pager reads it through the
+// real page source (a viewer's package replaced under it): the pages past the new end and the
+// changed pages fail (counted, never retried), every other page arrives, and the tables read at
+// open stay as they were. With a mapping, reading past the new end was a SIGBUS.
+TEST(Pager, APackageCutShortOrOverwrittenWhileOpenFailsOnlyItsPages) {
+  const fs::path copy = test::scratchDir() / "grid.twk";
+  fs::copy_file(gridPackage(), copy);
+  PackageView view = PackageView::open(copy);
+  const std::vector<uint32_t> pages = allPages(view);
+  ASSERT_GT(pages.size(), 20u);
+  const std::string name0(view.objectName(0));
+  const uint64_t page_data = view.section(pkg::SectionType::PageData).offset;
+  // Keep the first half of the pages' bytes; then zero a page inside what is left.
+  const uint32_t half = uint32_t(pages.size() / 2);
+  const uint64_t cut = page_data + view.pages()[half].offset;
+  fs::resize_file(copy, cut);
+  {
+    std::fstream file(copy, std::ios::in | std::ios::out | std::ios::binary);
+    file.seekp(std::streamoff(page_data + view.pages()[1].offset));
+    const std::vector<char> zeros(view.pages()[1].stored_bytes, 0);
+    file.write(zeros.data(), std::streamsize(zeros.size()));
+  }
+  PagerOptions options;
+  options.gpu_budget_bytes = 64ull << 20;
+  Pager pager(view, makePackagePageSource(view), options);
+  uint64_t frame = 1;
+  RunResult run = runUntilSettled(pager, pages, frame, 20.0, [](auto&) {});
+  ASSERT_TRUE(run.settled);
+  for (uint32_t p : pages) {
+    const bool lost = p >= half || p == 1;
+    EXPECT_EQ(pager.failed(p), lost) << "page " << p;
+    EXPECT_EQ(pager.resident(p), !lost) << "page " << p;
+  }
+  EXPECT_EQ(pager.stats().load_errors, pages.size() - half + 1);
+  EXPECT_EQ(view.objectName(0), name0);
+  std::vector<uint8_t> raw;
+  try {
+    view.readPage(half + 1, raw);
+    ADD_FAILURE() << "a page past the end was read";
+  } catch (const FormatError& e) {
+    EXPECT_NE(std::string(e.what()).find("truncated after it was opened"), std::string::npos)
+        << e.what();
+  }
 }
 
 // Random byte damage in every page, many times over: each page ends resident (the damage hit
