@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <stb_image.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -360,6 +362,73 @@ TEST(Cli, PreprocessOnAFullDiskLeavesNothingBehindAndResumesAfterSpaceIsFreed) {
   const auto reference = dir / "reference.twk";
   ASSERT_EQ(run("preprocess --quiet " + file.string() + " -o " + reference.string()).exit_code, 0);
   EXPECT_EQ(test::readFile(out), test::readFile(reference));
+}
+
+// SIGKILL as each stage of a bricked preprocess begins, with an older package at the output
+// path: the older package is never touched (nothing half-written is ever under the final name,
+// nor anywhere but the work folder), and `--resume` finishes with the bytes of a build that was
+// never killed, leaving nothing behind. Stages are found by the progress lines on stderr.
+TEST(Cli, PreprocessKilledAtEveryStageResumesToTheSameBytes) {
+  auto dir = test::scratchDir();
+  const auto mesh = dir / "plant.ply";
+  ASSERT_EQ(run("gen plant --quiet --triangles 300000 --seed 4 --no-db -o " +
+                (dir / "plant.tws").string() + " --mesh " + mesh.string())
+                .exit_code,
+            0);
+  const std::string options = " --brick-triangles 40000";
+  const auto reference = dir / "reference.twk";
+  ASSERT_EQ(run("preprocess -q " + mesh.string() + " -o " + reference.string() + options).exit_code,
+            0);
+  const auto older = dir / "older.twk";
+  ASSERT_EQ(run("preprocess -q " + (dir / "plant.tws").string() + " -o " + older.string() +
+                " --brick-triangles 300000")
+                .exit_code,
+            0);
+  const auto out_dir = dir / "out";
+  const auto out = out_dir / "plant.twk";
+  const auto log = dir / "stderr.txt";
+  for (const char* stage : {"survey", "bricking", "find seams", "build bricks", "merge bricks",
+                            "pack", "write package", "visibility cells", "visibility rays"}) {
+    SCOPED_TRACE(stage);
+    std::filesystem::remove_all(out_dir);
+    std::filesystem::create_directories(out_dir);
+    std::filesystem::copy_file(older, out);
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      if (!std::freopen(log.c_str(), "w", stderr) || !std::freopen("/dev/null", "w", stdout))
+        ::_exit(127);
+      ::execl(TW_TERAWALK_EXE, "terawalk", "preprocess", mesh.c_str(), "-o", out.c_str(),
+              "--brick-triangles", "40000", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Progress lines end in "\r" or "\n"; a stage begins with "<stage>...".
+    const std::string begins = std::string(stage) + "...";
+    bool seen = false;
+    int status = 0;
+    for (int polls = 0; polls < 60000 && !seen; ++polls) {
+      if (::waitpid(pid, &status, WNOHANG) == pid) break;
+      seen = test::readFile(log).find(begins) != std::string::npos;
+      if (!seen) ::usleep(2000);
+    }
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &status, 0);
+    EXPECT_TRUE(seen) << "the run ended before the stage began: " << test::readFile(log);
+    EXPECT_TRUE(WIFSIGNALED(status)) << "killed";
+    EXPECT_EQ(test::readFile(out), test::readFile(older)) << "the older package is untouched";
+    for (const auto& entry : std::filesystem::directory_iterator(out_dir)) {
+      const std::string name = entry.path().filename().string();
+      EXPECT_TRUE(name == "plant.twk" || name == "plant.twk.work") << "left behind: " << name;
+    }
+    RunResult resumed =
+        run("preprocess -q --resume " + mesh.string() + " -o " + out.string() + options);
+    ASSERT_EQ(resumed.exit_code, 0) << resumed.output;
+    EXPECT_EQ(test::readFile(out), test::readFile(reference)) << "resumed to other bytes";
+    EXPECT_EQ(std::distance(std::filesystem::directory_iterator(out_dir),
+                            std::filesystem::directory_iterator()),
+              1)
+        << "the work folder is removed after the resumed run";
+  }
 }
 
 // A read-only output folder (a read-only tmpfs, as root ignores permission bits): preprocess
