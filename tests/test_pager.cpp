@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include "package_view.h"
@@ -32,6 +33,11 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
+
+// The fixtures are built by the preprocessor on one TBB thread: these tests are about the pager's
+// own threads, and ThreadSanitizer (tools/sanitize.sh) cannot see the synchronization inside
+// Debian's uninstrumented TBB scheduler, so work it shares out would read as data races.
+const tbb::global_control kOneTbbThread(tbb::global_control::max_allowed_parallelism, 1);
 using namespace std::chrono_literals;
 
 double msSince(Clock::time_point t0) {

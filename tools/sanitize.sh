@@ -2,8 +2,9 @@
 # The readers', the scene's and the package's tests built with AddressSanitizer and
 # UndefinedBehaviorSanitizer (GCC, -DTERAWALK_SANITIZE=ON, build/asan): the code that takes
 # untrusted bytes, checked on the same inputs the tests feed it, complementing tools/fuzz.sh.
-# The rest of the suite (the DAG builder, the runtime and GL) is not in this stage: building it
-# once more does not fit CI's time (docs/reliability.md, "Sanitizers").
+# Then the threaded code's tests under ThreadSanitizer (build/tsan). The rest of the suite (the
+# DAG builder, the runtime and GL) is not in these stages: building it once more does not fit
+# CI's time (docs/reliability.md, "Sanitizers").
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -32,4 +33,27 @@ for t in "${tests[@]}"; do
   fi
   echo "sanitize: $t: $(printf '%s\n' "$out" | grep -E '^\[  PASSED  \]' | head -1)"
 done
-echo "sanitize: all passed; run in $(( $(date +%s) - run_start )) s, $(( $(date +%s) - start )) s in all"
+echo "sanitize: AddressSanitizer stage passed; run in $(( $(date +%s) - run_start )) s, $(( $(date +%s) - start )) s in all"
+
+# ThreadSanitizer over the code that starts threads of its own: the pager's loader threads
+# (test_pager) and the package reader's table decompression (test_package). The preprocessor's
+# TBB work is left out: Debian's TBB scheduler is not instrumented, so ThreadSanitizer cannot see
+# its synchronization and reports every parallel_for and parallel_sort as a race.
+tsan_build=${TERAWALK_TSAN_BUILD_DIR:-build/tsan}
+tsan_tests=(test_pager test_package)
+start=$(date +%s)
+mkdir -p "$tsan_build"
+cmake -S . -B "$tsan_build" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTERAWALK_TSAN=ON \
+  -DTERAWALK_WERROR=OFF -DTERAWALK_BUILD_BENCH=OFF > "$tsan_build/configure.log"
+cmake --build "$tsan_build" --target "${tsan_tests[@]}" -j "$(nproc)"
+echo "sanitize: ${#tsan_tests[@]} ThreadSanitizer programs built in $(( $(date +%s) - start )) s"
+run_start=$(date +%s)
+for t in "${tsan_tests[@]}"; do
+  if ! out=$(TSAN_OPTIONS=halt_on_error=1:second_deadlock_stack=1 "$tsan_build/tests/$t" --gtest_brief=1 2>&1); then
+    printf '%s\n' "$out" | tail -60 >&2
+    echo "sanitize: $t FAILED under ThreadSanitizer" >&2
+    exit 1
+  fi
+  echo "sanitize: $t (ThreadSanitizer): $(printf '%s\n' "$out" | grep -E '^\[  PASSED  \]' | head -1)"
+done
+echo "sanitize: ThreadSanitizer stage passed; run in $(( $(date +%s) - run_start )) s"
