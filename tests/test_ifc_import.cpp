@@ -232,6 +232,54 @@ TEST(IfcImport, AnOpeningIsCutFromItsWall) {
   EXPECT_TRUE(segmentHits(wall, {-1.0, -1.0, 1.5}, {-1.0, 1.0, 1.5})) << "beside it";
 }
 
+// Colours through materials: a wall whose body carries no style takes the colour of the first
+// layer of its material layer set (IfcMaterialDefinitionRepresentation), a style on the body
+// item wins over it, and a material without a representation leaves the default.
+TEST(IfcImport, AProductWithoutAStyleTakesItsMaterialsColour) {
+  const std::string material = R"(#60=IFCMATERIAL('Brick',$,$);
+#61=IFCMATERIALLAYER(#60,0.2,$,$,$,$,$);
+#62=IFCMATERIALLAYERSET((#61),'Wall 200',$);
+#63=IFCMATERIALLAYERSETUSAGE(#62,.AXIS2.,.POSITIVE.,0.,$);
+#64=IFCRELASSOCIATESMATERIAL('0vSG6yzOX4kRzX6Y5BkDVY',$,$,$,(#10),#63);
+#65=IFCCOLOURRGB($,0.8,0.4,0.2);
+#66=IFCSURFACESTYLERENDERING(#65,0.,$,$,$,$,$,$,.NOTDEFINED.);
+#67=IFCSURFACESTYLE('Brick',.BOTH.,(#66));
+#68=IFCSTYLEDITEM($,(#67),$);
+#69=IFCSTYLEDREPRESENTATION($,'Style','Material',(#68));
+#70=IFCMATERIALDEFINITIONREPRESENTATION($,$,(#69),#60);
+)";
+  const std::string own_style = R"(#80=IFCCOLOURRGB($,0.,0.,1.);
+#81=IFCSURFACESTYLERENDERING(#80,0.,$,$,$,$,$,$,.NOTDEFINED.);
+#82=IFCSURFACESTYLE('Blue',.BOTH.,(#81));
+#83=IFCSTYLEDITEM(#30,(#82),$);
+)";
+  auto colourOf = [](const std::string& text) {
+    const test::CollectingSink sink = importText(text, nullptr);
+    EXPECT_EQ(sink.objects.size(), 1u);
+    return sink.objects.empty() ? 0u : sink.objects[0].info.color_rgba;
+  };
+  EXPECT_EQ(colourOf(wallIfc("#30", material)), 0xFF3366CCu) << "the material's brick red";
+  EXPECT_EQ(colourOf(wallIfc("#30", material + own_style)), 0xFFFF0000u) << "the item's blue";
+  const std::string no_representation = material.substr(0, material.find("#65="));
+  EXPECT_EQ(colourOf(wallIfc("#30", no_representation)), 0u) << "no colour known";
+}
+
+// On the samples, the products left without a colour (9, 0 and 24 of them from the items' styles
+// alone): TestModel's walls and slabs are coloured through their materials; acad2010's columns,
+// beams and member through their type's material (a mapped representation of a type whose
+// material has a style). TestModel's two railings and three stair parts have neither in the file.
+TEST(IfcImport, TheSamplesColourProductsThroughTheirMaterials) {
+  auto uncoloured = [](const char* name) {
+    std::set<std::string> keys;
+    for (const SceneObject& o : import(sample(name)).objects)
+      if (o.info.color_rgba == 0) keys.insert(o.info.db_key);
+    return keys.size();
+  };
+  EXPECT_EQ(uncoloured("TestModel_IFC4Add2.ifc"), 5u);
+  EXPECT_EQ(uncoloured("bcf-architectural.ifc"), 0u);
+  EXPECT_EQ(uncoloured("acad2010_objects.ifc"), 0u);
+}
+
 // IfcBooleanClippingResult: the wall less a half-space above z = 2.5 (normal up, material on
 // its side: AgreementFlag false), less the one below it (true), and less a half-space bounded
 // by a polygon covering only the wall's left half.

@@ -45,6 +45,7 @@ class IfcImporter {
   void run() {
     readUnits();
     readStyles();
+    readMaterialColours();
     readLayers();
     readOpenings();
     std::vector<uint64_t> ids;
@@ -169,6 +170,93 @@ class IfcImporter {
     }
   }
 
+  // A product whose items carry no style takes its material's colour, else its type's
+  // (IfcRelDefinesByType), else that of the type whose representation map it draws:
+  // IfcRelAssociatesMaterial names the material (directly, or through a layer set, profile set,
+  // constituent set or list: the first one with a colour), and IfcMaterialDefinitionRepresentation
+  // gives a material its styled items. Authoring tools often colour walls and slabs this way only.
+  void readMaterialColours() {
+    std::unordered_map<uint64_t, uint32_t> of_material;
+    for (uint64_t id : f_.idsOfType("IFCMATERIALDEFINITIONREPRESENTATION")) {
+      const Step21Instance* definition = f_.find(id);
+      const Step21Value& material = arg(definition, 3);
+      if (material.kind != Kind::Ref || of_material.count(material.ref)) continue;
+      if (auto c = styledRepresentationsColour(arg(definition, 2)))
+        of_material.emplace(material.ref, *c);
+    }
+    if (of_material.empty()) return;
+    for (uint64_t id : f_.idsOfType("IFCRELASSOCIATESMATERIAL")) {
+      const Step21Instance* rel = f_.find(id);
+      const auto c = materialColour(arg(rel, 5), of_material, 0);
+      if (!c) continue;
+      for (const Step21Value& object : arg(rel, 4).items)
+        if (object.kind == Kind::Ref) material_colour_.emplace(object.ref, *c);
+    }
+    // A product without a material of its own takes its type's (IfcRelDefinesByType).
+    for (uint64_t id : f_.idsOfType("IFCRELDEFINESBYTYPE")) {
+      const Step21Instance* rel = f_.find(id);
+      const Step21Value& type = arg(rel, 5);
+      auto it = material_colour_.find(type.ref);
+      if (type.kind != Kind::Ref || it == material_colour_.end()) continue;
+      const uint32_t c = it->second;
+      for (const Step21Value& object : arg(rel, 4).items)
+        if (object.kind == Kind::Ref) material_colour_.emplace(object.ref, c);
+    }
+    // A type's representation maps (IfcTypeProduct's seventh attribute) drawn through mapped
+    // items carry the type's material, whichever product maps them.
+    for (const auto& [type, c] : material_colour_) {
+      const Step21Instance* t = f_.find(type);
+      if (!t || t->type.size() < 4 || t->type.compare(t->type.size() - 4, 4, "TYPE") != 0) continue;
+      for (const Step21Value& map : arg(t, 6).items)
+        if (map.kind == Kind::Ref) map_colour_.emplace(map.ref, c);
+    }
+  }
+
+  // The first surface colour of a list of IfcStyledRepresentations' styled items.
+  std::optional<uint32_t> styledRepresentationsColour(const Step21Value& representations) const {
+    for (const Step21Value& r : representations.items) {
+      const Step21Instance* rep = f_.deref(r);
+      if (!rep) continue;
+      for (const Step21Value& i : arg(rep, 3).items) {
+        const Step21Instance* styled = f_.deref(i);
+        if (!styled || styled->type != "IFCSTYLEDITEM") continue;
+        for (const Step21Value& s : arg(styled, 1).items)
+          if (auto c = surfaceColour(f_.deref(s), 0)) return c;
+      }
+    }
+    return std::nullopt;
+  }
+
+  // The colour of an IfcMaterialSelect (a reference): a material's own, else the first of its
+  // parts' that has one (a wall's layers from the first, the side a viewer usually sees).
+  std::optional<uint32_t> materialColour(const Step21Value& select,
+                                         const std::unordered_map<uint64_t, uint32_t>& of_material,
+                                         int depth) const {
+    const Step21Instance* m = f_.deref(select);
+    if (!m || depth > 6) return std::nullopt;
+    const std::string& t = m->type;
+    if (t == "IFCMATERIAL") {
+      auto it = of_material.find(select.ref);
+      return it == of_material.end() ? std::nullopt : std::optional<uint32_t>(it->second);
+    }
+    auto one = [&](const Step21Value& part) { return materialColour(part, of_material, depth + 1); };
+    auto first = [&](const Step21Value& list) -> std::optional<uint32_t> {
+      for (const Step21Value& part : list.items)
+        if (auto c = one(part)) return c;
+      return std::nullopt;
+    };
+    if (t == "IFCMATERIALLAYERSETUSAGE" || t == "IFCMATERIALPROFILESETUSAGE" ||
+        t == "IFCMATERIALPROFILESETUSAGETAPERING" || t == "IFCMATERIALLAYER" ||
+        t == "IFCMATERIALLAYERWITHOFFSETS")
+      return one(arg(m, 0));
+    if (t == "IFCMATERIALLAYERSET" || t == "IFCMATERIALLIST") return first(arg(m, 0));
+    if (t == "IFCMATERIALPROFILE" || t == "IFCMATERIALPROFILEWITHOFFSETS" ||
+        t == "IFCMATERIALCONSTITUENT")
+      return one(arg(m, 2));
+    if (t == "IFCMATERIALPROFILESET" || t == "IFCMATERIALCONSTITUENTSET") return first(arg(m, 2));
+    return std::nullopt;
+  }
+
   void readLayers() {
     for (const char* type : {"IFCPRESENTATIONLAYERASSIGNMENT", "IFCPRESENTATIONLAYERWITHSTYLE"})
       for (uint64_t id : f_.idsOfType(type)) {
@@ -259,6 +347,7 @@ class IfcImporter {
     mesh_ = TriangleMesh{};
     primitives_.clear();
     colour_ = 0;
+    map_colour_found_.reset();
     for (const Step21Instance* rep : bodies)
       for (const Step21Value& item : arg(rep, 3).items) {
         if (layer.empty())
@@ -267,6 +356,10 @@ class IfcImporter {
         if (item.kind == Kind::Ref) importItem(item.ref, glm::dmat4(1.0), 0);
       }
     cutOpenings(product_id, world);
+    if (colour_ == 0) {
+      auto it = material_colour_.find(product_id);
+      colour_ = it != material_colour_.end() ? it->second : map_colour_found_.value_or(0);
+    }
     if (!options_.cad_primitives) meshPrimitives();
     if (mesh_.indices.empty() && primitives_.empty()) return;
 
@@ -448,6 +541,8 @@ class IfcImporter {
     const Step21Instance* source = f_.deref(arg(&item, 0));
     const Step21Instance* op = f_.deref(arg(&item, 1));
     if (!source || source->type != "IFCREPRESENTATIONMAP") throw ItemError{"no representation map"};
+    if (auto it = map_colour_.find(arg(&item, 0).ref); it != map_colour_.end() && !map_colour_found_)
+      map_colour_found_ = it->second;
     glm::dmat4 target(1.0);
     if (op && op->type.rfind("IFCCARTESIANTRANSFORMATIONOPERATOR3D", 0) == 0) {
       const glm::dvec3 origin = point(f_.deref(arg(op, 2)));
@@ -945,7 +1040,9 @@ class IfcImporter {
   const ReadOptions& options_;
   double length_ = 1.0;  // metres per file length unit
   double angle_ = 1.0;   // radians per file angle unit
-  std::unordered_map<uint64_t, uint32_t> colours_;
+  std::unordered_map<uint64_t, uint32_t> colours_;          // styled item -> colour
+  std::unordered_map<uint64_t, uint32_t> material_colour_;  // product or type -> its material's
+  std::unordered_map<uint64_t, uint32_t> map_colour_;  // representation map -> its type's material's
   std::unordered_map<uint64_t, std::string> layer_of_;
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;
@@ -956,6 +1053,7 @@ class IfcImporter {
   TriangleMesh mesh_;
   std::vector<std::pair<glm::dmat4, Primitive>> primitives_;
   uint32_t colour_ = 0;
+  std::optional<uint32_t> map_colour_found_;  // of the first mapped item whose type has a colour
 };
 
 }  // namespace
