@@ -1,5 +1,5 @@
 // Camera paths: the text reader and writer, interpolation between key frames, and the generated
-// orbit and fly-through paths `render` uses when it is given no path file.
+// orbit, fly-through and random-walk paths `render` uses when it is given no path file.
 #include "camera_path.h"
 
 #include <algorithm>
@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <numbers>
+#include <random>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -278,6 +279,83 @@ CameraPath generateFlythroughPath(const Aabb& bounds, int frames, double fps) {
     key.camera.fov_y_rad = 60.0 * kDegToRad;
     path.keys.push_back(key);
   }
+  return path;
+}
+
+namespace {
+
+// Uniform doubles in [0, 1) from a 64-bit Mersenne twister, mapped by hand: the standard's
+// distributions differ between library versions, and a soak path must be the same everywhere.
+class WalkRandom {
+ public:
+  explicit WalkRandom(uint64_t seed) : engine_(seed) {}
+  double unit() { return double(engine_() >> 11) * 0x1.0p-53; }
+  double between(double lo, double hi) { return lo + (hi - lo) * unit(); }
+  int frames(int lo, int hi) { return lo + int(unit() * (hi - lo + 1)); }
+
+ private:
+  std::mt19937_64 engine_;
+};
+
+}  // namespace
+
+CameraPath generateRandomWalkPath(const Aabb& bounds, int frames, double fps, uint64_t seed) {
+  checkBoundsAndFrames(bounds, frames, fps);
+  const glm::dvec3 extent = bounds.extent();
+  const glm::dvec3 lo = bounds.min - extent * 0.1, hi = bounds.max + extent * 0.1;
+  const double length = std::max({extent.x, extent.y, extent.z, 1.0});
+  WalkRandom random(seed);
+  auto randomPoint = [&] {
+    return glm::dvec3(random.between(bounds.min.x, bounds.max.x),
+                      random.between(bounds.min.y, bounds.max.y),
+                      random.between(bounds.min.z, bounds.max.z));
+  };
+  auto lookAt = [](Camera& c, const glm::dvec3& target) {
+    const glm::dvec3 d = target - c.position;
+    if (glm::length(glm::dvec2(d)) > 0.0) c.yaw_rad = std::atan2(d.y, d.x);
+    c.pitch_rad = std::clamp(std::atan2(d.z, glm::length(glm::dvec2(d))), -0.6, 0.6);
+  };
+
+  Camera camera;
+  camera.position = bounds.center();
+  camera.fov_y_rad = 60.0 * kDegToRad;
+  CameraPath path;
+  path.keys.reserve(size_t(frames));
+  auto key = [&] {
+    camera.position = glm::clamp(camera.position, lo, hi);
+    path.keys.push_back(CameraKey{double(path.keys.size()) / fps, camera});
+  };
+  while (int(path.keys.size()) < frames) {
+    const double pick = random.unit();
+    if (pick < 0.2) {  // teleport, looking at another point of the model, then look around
+      camera.position = randomPoint();
+      lookAt(camera, randomPoint());
+      const int hold = random.frames(10, 30);
+      const double drift = random.between(-0.5, 0.5) / fps;
+      for (int i = 0; i < hold; ++i, camera.yaw_rad += drift) key();
+    } else if (pick < 0.5) {  // fast flight to a random point, looking where it goes
+      const glm::dvec3 from = camera.position, to = randomPoint();
+      const int steps = std::max(1, int(glm::length(to - from) / length * fps));
+      const glm::dvec3 d = to - from;
+      lookAt(camera, to);
+      for (int i = 1; i <= steps; ++i) {
+        camera.position = from + d * (double(i) / steps);
+        key();
+      }
+    } else if (pick < 0.75) {  // a whole turn in place, either way
+      const int steps = random.frames(int(fps), int(2 * fps));
+      const double turn = (random.unit() < 0.5 ? -2.0 : 2.0) * std::numbers::pi / steps;
+      for (int i = 0; i < steps; ++i, camera.yaw_rad += turn) key();
+    } else {  // a walk straight ahead, level
+      camera.pitch_rad = 0.0;
+      const glm::dvec3 step(std::cos(camera.yaw_rad) * 1.5 / fps,
+                            std::sin(camera.yaw_rad) * 1.5 / fps, 0.0);
+      const int steps = random.frames(int(fps), int(3 * fps));
+      for (int i = 0; i < steps; ++i, camera.position += step) key();
+    }
+    camera.yaw_rad = std::remainder(camera.yaw_rad, 2.0 * std::numbers::pi);
+  }
+  path.keys.resize(size_t(frames));
   return path;
 }
 

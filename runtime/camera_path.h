@@ -1,5 +1,5 @@
 // Camera paths: the small text format the viewer records and `render` / `view` replay, and the
-// paths `render` can generate (an orbit around the model, a fly-through of it).
+// paths `render` can generate (an orbit around the model, a fly-through of it, a random walk).
 //
 // Format (docs/runtime.md is the spec), UTF-8 text, one key frame per line:
 //   # terawalk camera path 1        <- required first line (the version)
@@ -10,6 +10,7 @@
 // else with FormatError naming the file, the line and the reason.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <vector>
 
@@ -43,5 +44,11 @@ CameraPath generateOrbitPath(const Aabb& bounds, int frames, double fps = 30.0);
 // A fly-through: enters the bounds from one end at about a third of its height, flies along the
 // longest horizontal axis through the middle and out of the far end, looking ahead.
 CameraPath generateFlythroughPath(const Aabb& bounds, int frames, double fps = 30.0);
+// A random walk for soak runs: one key per frame, in segments drawn from `seed` (the same path on
+// every machine): teleports to a random point of the bounds looking at another, fast flights to
+// a random point (about the model's length a second), turns in place (a whole turn in one to two
+// seconds) and walks ahead at 1.5 m/s, always inside the bounds grown by a tenth.
+CameraPath generateRandomWalkPath(const Aabb& bounds, int frames, double fps = 30.0,
+                                  uint64_t seed = 1);
 
 }  // namespace tw

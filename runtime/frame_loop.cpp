@@ -475,6 +475,9 @@ void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) 
   const PagerStats pager_stats = pager_->stats();
   stats.pages_resident = pager_stats.pages_resident;
   stats.pages_requested = pager_stats.pages_requested;
+  stats.pages_loading = pager_stats.pages_loading;
+  stats.pages_ready = pager_stats.pages_ready;
+  stats.pages_waiting_for_pool = pager_stats.pages_waiting_for_pool;
   stats.pages_loaded = pager_stats.pages_uploaded;
   stats.pages_evicted = pager_stats.pages_evicted;
   stats.page_load_errors = pager_stats.load_errors;

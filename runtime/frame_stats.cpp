@@ -46,6 +46,9 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("parametric_instances_tested", s.parametric_instances_tested);
   visit("pages_resident", s.pages_resident);
   visit("pages_requested", s.pages_requested);
+  visit("pages_loading", s.pages_loading);
+  visit("pages_ready", s.pages_ready);
+  visit("pages_waiting_for_pool", s.pages_waiting_for_pool);
   visit("pages_loaded", s.pages_loaded);
   visit("pages_evicted", s.pages_evicted);
   visit("bytes_uploaded", s.bytes_uploaded);

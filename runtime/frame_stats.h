@@ -44,6 +44,9 @@ struct FrameStats {
   uint64_t parametric_instances_tested = 0;
   uint32_t pages_resident = 0;
   uint32_t pages_requested = 0;     // in the queue at the end of the frame
+  uint32_t pages_loading = 0;       // being read and decoded by a loader thread then
+  uint32_t pages_ready = 0;         // decoded, waiting for their upload (or for pool space)
+  uint32_t pages_waiting_for_pool = 0;  // this frame: ready pages that found no room in the pool
   uint32_t pages_loaded = 0;        // uploaded this frame
   uint32_t pages_evicted = 0;
   uint64_t bytes_uploaded = 0;

@@ -473,5 +473,43 @@ TEST(CameraPath, FlythroughCrossesTheLongestHorizontalAxis) {
   expectNear(generateFlythroughPath(wide, 2).keys[0].camera.forward(), {1, 0, 0}, 1e-12);
 }
 
+// The soak's random walk: one key per frame, the same for one seed and different for another,
+// always inside the bounds grown by a tenth, and made of the four kinds of segment: teleports
+// (a jump of more than a tenth of the model between two frames), fast flights (steady steps of
+// about the model's length a second), turns in place and walks at 1.5 m/s.
+TEST(CameraPath, RandomWalkTeleportsFliesTurnsAndWalksInsideTheModel) {
+  Aabb bounds;
+  bounds.add(glm::dvec3(1000.0, 2000.0, 0.0));
+  bounds.add(glm::dvec3(1040.0, 2020.0, 10.0));
+  const CameraPath path = generateRandomWalkPath(bounds, 3000, 30.0, 7);
+  ASSERT_EQ(path.keys.size(), 3000u);
+  const glm::dvec3 grown = bounds.extent() * 0.1;
+  int teleports = 0, flight_steps = 0, turn_steps = 0, walk_steps = 0;
+  for (size_t i = 0; i < path.keys.size(); ++i) {
+    const Camera& c = path.keys[i].camera;
+    EXPECT_NEAR(path.keys[i].time_s, double(i) / 30.0, 1e-9);
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_GE(c.position[a], bounds.min[a] - grown[a] - 1e-9);
+      EXPECT_LE(c.position[a], bounds.max[a] + grown[a] + 1e-9);
+    }
+    if (i == 0) continue;
+    const Camera& b = path.keys[i - 1].camera;
+    const double step = glm::length(c.position - b.position);
+    const double turn = std::abs(std::remainder(c.yaw_rad - b.yaw_rad, 2.0 * std::numbers::pi));
+    if (step > 4.0) ++teleports;                          // 40 m model: over a tenth
+    else if (step > 0.5) ++flight_steps;                  // about 40 m/s at 30 frames a second
+    else if (std::abs(step - 0.05) < 1e-6) ++walk_steps;  // 1.5 m/s
+    else if (step == 0.0 && turn > 0.05) ++turn_steps;    // a turn in one to two seconds
+  }
+  EXPECT_GE(teleports, 10);
+  EXPECT_GE(flight_steps, 100);
+  EXPECT_GE(turn_steps, 300);
+  EXPECT_GE(walk_steps, 300);
+  const CameraPath again = generateRandomWalkPath(bounds, 3000, 30.0, 7);
+  const CameraPath other = generateRandomWalkPath(bounds, 3000, 30.0, 8);
+  EXPECT_EQ(again.keys.back().camera.position, path.keys.back().camera.position);
+  EXPECT_NE(other.keys.back().camera.position, path.keys.back().camera.position);
+}
+
 }  // namespace
 }  // namespace tw

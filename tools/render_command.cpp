@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -25,6 +26,7 @@
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_queries.h"
+#include "soak_log.h"
 #include "tessellate.h"
 
 namespace tw {
@@ -35,6 +37,10 @@ struct RenderArgs {
   std::string path_file;
   int orbit_frames = 0;
   int flythrough_frames = 0;
+  int random_walk_frames = 0;
+  uint64_t seed = 1;
+  double soak_interval_s = 0.0;
+  double max_seconds = 0.0;
   std::string save_path;
   std::string size = "1280x720";
   std::string out_dir;
@@ -94,6 +100,7 @@ double msSince(Clock::time_point start) {
 constexpr double kMaxFps = 1000.0;
 constexpr double kMaxWalkSteps = 1000.0;
 constexpr double kMaxTauPx = 1e4;
+constexpr int kMaxGeneratedFrames = 10'000'000;  // a generated path's keys: under 1 GB
 
 void validateArgs(const RenderArgs& args) {
   auto number = [](double v) {
@@ -115,11 +122,23 @@ void validateArgs(const RenderArgs& args) {
   if (!(args.target_fps >= 0.0 && args.target_fps <= kMaxFps))
     throw std::runtime_error("--target-fps " + number(args.target_fps) + ": must be 0 (off) to " +
                              number(kMaxFps));
-  const int path_sources =
-      int(!args.path_file.empty()) + int(args.orbit_frames > 0) + int(args.flythrough_frames > 0);
+  const int path_sources = int(!args.path_file.empty()) + int(args.orbit_frames > 0) +
+                           int(args.flythrough_frames > 0) + int(args.random_walk_frames > 0);
   if (path_sources != 1)
-    throw std::runtime_error("give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES");
+    throw std::runtime_error(
+        "give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES, --random-walk FRAMES");
+  if (std::max({args.orbit_frames, args.flythrough_frames, args.random_walk_frames}) >
+      kMaxGeneratedFrames)
+    throw std::runtime_error("a generated path has at most " + std::to_string(kMaxGeneratedFrames) +
+                             " frames");
   if (args.png && args.out_dir.empty()) throw std::runtime_error("--png needs --out DIR");
+  if (!(args.max_seconds >= 0.0 && args.max_seconds <= 1e7))
+    throw std::runtime_error("--max-seconds " + number(args.max_seconds) + ": must be 0 (no limit) to 1e7");
+  if (args.soak_interval_s != 0.0 && (args.out_dir.empty() || !(args.soak_interval_s > 0.0) ||
+                                      args.png || args.check_occlusion))
+    throw std::runtime_error(
+        "--soak-interval takes a positive number of seconds and --out DIR, without --png or "
+        "--check-occlusion");
   if (args.xray_others && args.isolate_layers.empty() && args.isolate_keys.empty() &&
       args.select_keys.empty())
     throw std::runtime_error("--xray-others needs --isolate-layer, --isolate-keys or --select");
@@ -160,12 +179,14 @@ WalkthroughOptions walkthroughOptions(const RenderArgs& args, int width, int hei
   return options;
 }
 
-// The camera path from --path, or an orbit or fly-through around the model's bounds; written to
-// --save-path when asked.
+// The camera path from --path, or an orbit, fly-through or random walk around the model's bounds;
+// written to --save-path when asked.
 CameraPath cameraPath(const RenderArgs& args, const Aabb& bounds) {
   CameraPath path;
   if (!args.path_file.empty()) path = readCameraPath(args.path_file);
   else if (args.orbit_frames > 0) path = generateOrbitPath(bounds, args.orbit_frames, args.fps);
+  else if (args.random_walk_frames > 0)
+    path = generateRandomWalkPath(bounds, args.random_walk_frames, args.fps, args.seed);
   else path = generateFlythroughPath(bounds, args.flythrough_frames, args.fps);
   if (path.keys.empty()) throw std::runtime_error("the camera path has no key frames");
   if (!args.save_path.empty()) writeCameraPath(path, args.save_path);
@@ -237,6 +258,8 @@ struct RenderedPath {
   int walk_steps = 1;
   double first_frame_ms = 0.0;  // from opening the package to the first recorded frame
   std::vector<std::string> load_errors;  // pages that failed to load, in order
+  uint64_t soak_frames = 0, soak_intervals = 0, soak_peak_rss = 0;  // --soak-interval (frames
+                                                                     // then logs none)
 };
 
 // Pages that failed to load (a checksum mismatch, a read error) are drawn from their coarser
@@ -264,12 +287,19 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
   RenderedPath rendered;
   // --walk-fps: steps per recorded frame, so the recorded frames keep their times exactly.
   rendered.walk_steps = std::max(1, int(std::lround(args.walk_fps / args.fps)));
-  rendered.frames.reserve(frames);
+  // A soak keeps no per-frame log: its intervals go to soak.csv as they close (soak_log.h).
+  std::optional<SoakLog> soak;
+  if (args.soak_interval_s > 0.0)
+    soak.emplace(std::filesystem::path(args.out_dir) / "soak.csv", args.soak_interval_s);
+  else
+    rendered.frames.reserve(frames);
   const std::filesystem::path out_dir = args.out_dir;
   std::vector<uint8_t> rgba;
   std::vector<uint32_t> ids;
   const double t0 = path.keys.front().time_s;
+  const Clock::time_point loop_start = Clock::now();
   for (int i = 0; i < frames; ++i) {
+    if (args.max_seconds > 0.0 && msSince(loop_start) >= args.max_seconds * 1000.0) break;
     const double t = t0 + i / args.fps;
     // The camera between the previous recorded frame and this one, rendered and not recorded:
     // the pager, prefetch and occlusion see it move as in an interactive walkthrough.
@@ -284,10 +314,19 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
     if (i == 0) rendered.first_frame_ms = msSince(open_start);
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
     if (args.check_occlusion) occlusion_check.check(walk, stats);
-    rendered.frames.push_back(stats);
+    if (soak)
+      soak->add(stats);
+    else
+      rendered.frames.push_back(stats);
     if (!global.quiet && (i % 30 == 0 || i + 1 == frames))
       std::fprintf(stderr, "render: frame %d/%d  %.1f ms  %llu triangles\n", i + 1, frames,
                    stats.frame_ms, static_cast<unsigned long long>(stats.triangles_drawn));
+  }
+  if (soak) {
+    soak->finish();
+    rendered.soak_frames = soak->frames();
+    rendered.soak_intervals = soak->intervals();
+    rendered.soak_peak_rss = soak->peakRssBytes();
   }
   return rendered;
 }
@@ -307,7 +346,8 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
   const double first_frame_ms = rendered.first_frame_ms;
   const uint64_t walk_frames = rendered.walk_frames;
   const int walk_steps = rendered.walk_steps;
-  uint64_t peak_rss = 0, fallback_frames = 0, occlusion_culled_total = 0, cell_frames = 0;
+  uint64_t peak_rss = rendered.soak_peak_rss, fallback_frames = 0, occlusion_culled_total = 0,
+           cell_frames = 0;
   for (const FrameStats& f : all) {
     peak_rss = std::max(peak_rss, f.rss_bytes);
     fallback_frames += f.ancestor_fallbacks > 0;
@@ -319,7 +359,8 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"mode", args.reference ? "reference" : "lod"},
       {"width", width},
       {"height", height},
-      {"frames", frames},
+      {"frames", rendered.soak_intervals > 0 ? int64_t(rendered.soak_frames) : int64_t(frames)},
+      {"soak_intervals", rendered.soak_intervals},
       {"walk_fps", walk_steps * args.fps},
       {"walk_frames", walk_frames},
       {"tau_px", args.tau_px},
@@ -375,10 +416,12 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
   };
 }
 
-void writeRenderOutputs(const std::filesystem::path& out_dir, const std::vector<FrameStats>& all,
+void writeRenderOutputs(const std::filesystem::path& out_dir, const RenderedPath& rendered,
                         const nlohmann::json& summary) {
-  writeFrameStatsCsv(all, out_dir / "frames.csv");
-  writeFrameStatsJson(all, out_dir / "frames.json");
+  if (rendered.soak_intervals == 0) {
+    writeFrameStatsCsv(rendered.frames, out_dir / "frames.csv");
+    writeFrameStatsJson(rendered.frames, out_dir / "frames.json");
+  }
   std::FILE* f = std::fopen((out_dir / "summary.json").string().c_str(), "w");
   if (!f) throw std::runtime_error((out_dir / "summary.json").string() + ": cannot write");
   const std::string text = summary.dump(1) + "\n";
@@ -438,7 +481,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
       renderPath(args, global, walk, path, bounds, open_start, occlusion_check);
   nlohmann::json summary = renderSummary(args, options, context, walk, rendered, times);
   if (args.check_occlusion) occlusion_check.summarize(args, rendered.frames, summary);
-  if (!args.out_dir.empty()) writeRenderOutputs(args.out_dir, rendered.frames, summary);
+  if (!args.out_dir.empty()) writeRenderOutputs(args.out_dir, rendered, summary);
   std::printf("%s\n", summary.dump(1).c_str());
   // The frames and statistics are written; the exit status still says they are not the package's.
   if (!rendered.load_errors.empty())
@@ -458,6 +501,16 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
       ->check(CLI::ExistingFile);
   cmd->add_option("--orbit", args->orbit_frames, "Generate an orbit around the model, N frames");
   cmd->add_option("--flythrough", args->flythrough_frames, "Generate a fly-through, N frames");
+  cmd->add_option("--random-walk", args->random_walk_frames,
+                  "Generate a random walk, N frames: teleports, fast flights, turns in place and "
+                  "walks (a soak test's path; docs/runtime.md)");
+  cmd->add_option("--seed", args->seed, "Seed of --random-walk")->capture_default_str();
+  cmd->add_option("--max-seconds", args->max_seconds,
+                  "Stop recording after this many seconds of wall time (the frames so far are "
+                  "kept and written)");
+  cmd->add_option("--soak-interval", args->soak_interval_s,
+                  "Soak: keep no per-frame log; write OUT/soak.csv, one row of memory, pager "
+                  "queues, evictions and frame times per this many seconds of wall time");
   cmd->add_option("--save-path", args->save_path, "Write the (generated) camera path here");
   cmd->add_option("--size", args->size, "Image size WIDTHxHEIGHT")->capture_default_str();
   cmd->add_option("--out", args->out_dir, "Directory for frames.csv, frames.json, summary.json");
