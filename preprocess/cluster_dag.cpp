@@ -139,6 +139,7 @@ struct LevelContext {
   const std::vector<uint8_t>& near_other_group;    // within the package's grid error of another
                                                    // group's vertex (near_group_vertices.h)
   const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
+  float near_tolerance;  // what the package's grid will not tell apart (0: exact positions)
   const DagOptions& options;
   // false: a group that wants a far proxy (options.allow_proxy) only says so (GroupOutcome::
   // proxy_wanted) and keeps its best result without one. See the level loop.
@@ -213,6 +214,56 @@ struct LocalIndexMap {
   }
 };
 
+// Joins the free rim vertices of a group (on an edge not used exactly twice, not pinned) that lie
+// within `tolerance` of each other on every axis onto the smallest of them, dropping the triangles
+// that collapse (and their ids). Returns how far a vertex moved (0 when none did).
+template <typename Pinned>
+float joinNearRims(const std::vector<glm::vec3>& lpos, std::vector<uint32_t>& ltris,
+                   std::vector<uint32_t>& ids, Pinned&& pinned, float tolerance) {
+  if (!(tolerance > 0.0f)) return 0.0f;
+  std::vector<uint32_t> rims;
+  for (const EdgeCount& e : countEdges(ltris, lpos.size()))
+    if (e.count != 2)
+      for (uint32_t v : {uint32_t(e.key >> 32), uint32_t(e.key)})
+        if (!pinned(v)) rims.push_back(v);
+  if (rims.size() < 2) return 0.0f;
+  std::sort(rims.begin(), rims.end());
+  rims.erase(std::unique(rims.begin(), rims.end()), rims.end());
+  const VertexCellGrid grid(lpos, rims, tolerance);
+  UnionFind joined(uint32_t(lpos.size()));
+  bool any = false;
+  for (uint32_t v : rims)
+    grid.forEachWithin(lpos[v], v, [&](uint32_t w) {
+      joined.unite(v, w);
+      any = true;
+      return true;
+    });
+  if (!any) return 0.0f;
+  // Each set onto its smallest vertex.
+  std::vector<uint32_t> onto(lpos.size());
+  std::iota(onto.begin(), onto.end(), 0u);
+  std::vector<uint32_t> smallest(lpos.size(), UINT32_MAX);
+  for (uint32_t v : rims) smallest[joined.find(v)] = std::min(smallest[joined.find(v)], v);
+  float moved = 0.0f;
+  for (uint32_t v : rims) {
+    onto[v] = smallest[joined.find(v)];
+    const glm::vec3 d = glm::abs(lpos[v] - lpos[onto[v]]);
+    moved = std::max({moved, d.x, d.y, d.z});
+  }
+  size_t kept = 0;
+  for (size_t t = 0; t < ids.size(); ++t) {
+    const uint32_t a = onto[ltris[3 * t]], b = onto[ltris[3 * t + 1]], c = onto[ltris[3 * t + 2]];
+    if (a == b || b == c || a == c) continue;
+    ltris[3 * kept] = a;
+    ltris[3 * kept + 1] = b;
+    ltris[3 * kept + 2] = c;
+    ids[kept++] = ids[t];
+  }
+  ltris.resize(3 * kept);
+  ids.resize(kept);
+  return moved * std::sqrt(3.0f);
+}
+
 GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster>& work,
                           const std::vector<uint32_t>& members) {
   const DagOptions& options = ctx.options;
@@ -257,6 +308,13 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
     return isMulti(local) || (!ctx.open_vertex.empty() && ctx.open_vertex[l2g[local]]) ||
            ctx.near_other_group[l2g[local]];
   };
+
+  // Rims of the group that almost meet without being one vertex (two parts' rims within the
+  // package's grid error, or a seam the simplification below left a hair open) are joined first:
+  // the package decodes them, and `verify` and the eye see them, as one. Left apart, the
+  // simplification may move one side and not the other and open a gap the fine level did not
+  // show.
+  const float joined_m = joinNearRims(lpos, ltris, gids, isPinned, ctx.near_tolerance);
 
   const EdgeCounts in = countEdges(ltris, vcount);
   std::vector<uint64_t> shared;  // edges whose triangle count must not change
@@ -529,7 +587,7 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   }
 
   // 4. Cut the result into clusters again.
-  outcome.error = best.error;
+  outcome.error = std::max(best.error, joined_m);
   outcome.method = best.method;
   outcome.triangles = best.tris.size() / 3;
   lpos.insert(lpos.end(), best.extra.begin(), best.extra.end());
@@ -1011,8 +1069,10 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
           near_index.emplace(level_positions, level_vertices, tolerance);
         near_index->markNearOtherGroups(level_positions, vertex_owner, kMulti, near_other_group);
       }
-      LevelContext ctx{level_positions, vertex_owner,     shared_edges, open_vertex,
-                       near_other_group, open_edges,      options,      !options.allow_proxy};
+      const float near_tolerance = std::max(attempt_tolerance, 0.0f);  // -1 before the first
+      LevelContext ctx{level_positions, vertex_owner, shared_edges,   open_vertex,
+                       near_other_group, open_edges,   near_tolerance, options,
+                       !options.allow_proxy};
       // Proxies are built in a second pass over the whole level: with them, nothing is kept.
       if (options.allow_proxy) fresh.assign(groups.size(), 1);
       std::vector<uint32_t> to_build;

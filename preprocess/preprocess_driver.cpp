@@ -41,7 +41,7 @@ using Clock = std::chrono::steady_clock;
 
 // Bumped whenever the preprocessor's output changes for the same inputs and options, so that a
 // resume never mixes bricks built by two versions.
-constexpr uint32_t kPreprocessorRevision = 4;  // 4: bricks stop at a common level
+constexpr uint32_t kPreprocessorRevision = 5;  // 5: rims almost meeting in a group joined
 
 uint64_t peakRssBytes() {
   rusage usage{};
