@@ -31,5 +31,6 @@ void registerCompareCommand(CLI::App& app, const GlobalOptions& global);
 void registerBenchCommand(CLI::App& app, const GlobalOptions& global);
 void registerPickCommand(CLI::App& app, const GlobalOptions& global);
 void registerFindCommand(CLI::App& app, const GlobalOptions& global);
+void registerMeasureCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

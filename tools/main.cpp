@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   tw::registerCompareCommand(app, global);
   tw::registerBenchCommand(app, global);
   tw::registerPickCommand(app, global);
+  tw::registerMeasureCommand(app, global);
   tw::registerFindCommand(app, global);
   try {
     app.parse(argc, argv);
