@@ -140,6 +140,7 @@ struct LevelContext {
                                                    // group's vertex (near_group_vertices.h)
   const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
   float near_tolerance;  // what the package's grid will not tell apart (0: exact positions)
+  const NearVertexIndex* near_index;  // the level's vertex pairs within it (nullptr: none)
   const DagOptions& options;
   // false: a group that wants a far proxy (options.allow_proxy) only says so (GroupOutcome::
   // proxy_wanted) and keeps its best result without one. See the level loop.
@@ -214,18 +215,25 @@ struct LocalIndexMap {
   }
 };
 
-// Joins the free rim vertices of a group (on an edge not used exactly twice, not pinned) that lie
-// within `tolerance` of each other on every axis onto the smallest of them, dropping the triangles
-// that collapse (and their ids). Returns how far a vertex moved (0 when none did).
-template <typename Pinned>
+// Joins the rim vertices of a group (on an edge not used exactly twice) that `may_join` accepts
+// and that lie within `tolerance` of each other on every axis onto the smallest of them,
+// dropping the triangles that collapse (and their ids). Returns how far a vertex moved (0 when
+// none did).
+template <typename MayJoin>
 float joinNearRims(const std::vector<glm::vec3>& lpos, std::vector<uint32_t>& ltris,
-                   std::vector<uint32_t>& ids, Pinned&& pinned, float tolerance) {
+                   std::vector<uint32_t>& ids, MayJoin&& may_join, float tolerance) {
   if (!(tolerance > 0.0f)) return 0.0f;
+  std::vector<uint32_t> candidates;
+  for (uint32_t v = 0; v < lpos.size(); ++v)
+    if (may_join(v)) candidates.push_back(v);
+  if (candidates.size() < 2) return 0.0f;
   std::vector<uint32_t> rims;
+  std::vector<uint8_t> candidate(lpos.size(), 0);
+  for (uint32_t v : candidates) candidate[v] = 1;
   for (const EdgeCount& e : countEdges(ltris, lpos.size()))
     if (e.count != 2)
       for (uint32_t v : {uint32_t(e.key >> 32), uint32_t(e.key)})
-        if (!pinned(v)) rims.push_back(v);
+        if (candidate[v]) rims.push_back(v);
   if (rims.size() < 2) return 0.0f;
   std::sort(rims.begin(), rims.end());
   rims.erase(std::unique(rims.begin(), rims.end()), rims.end());
@@ -314,7 +322,11 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
   // the package decodes them, and `verify` and the eye see them, as one. Left apart, the
   // simplification may move one side and not the other and open a gap the fine level did not
   // show.
-  const float joined_m = joinNearRims(lpos, ltris, gids, isPinned, ctx.near_tolerance);
+  // Only vertices the level's index saw near another are candidates (most groups have none).
+  auto mayJoin = [&](uint32_t local) {
+    return ctx.near_index && ctx.near_index->hasNeighbour(l2g[local]) && !isPinned(local);
+  };
+  const float joined_m = joinNearRims(lpos, ltris, gids, mayJoin, ctx.near_tolerance);
 
   const EdgeCounts in = countEdges(ltris, vcount);
   std::vector<uint64_t> shared;  // edges whose triangle count must not change
@@ -1070,9 +1082,10 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
         near_index->markNearOtherGroups(level_positions, vertex_owner, kMulti, near_other_group);
       }
       const float near_tolerance = std::max(attempt_tolerance, 0.0f);  // -1 before the first
-      LevelContext ctx{level_positions, vertex_owner, shared_edges,   open_vertex,
-                       near_other_group, open_edges,   near_tolerance, options,
-                       !options.allow_proxy};
+      LevelContext ctx{level_positions, vertex_owner, shared_edges,
+                       open_vertex,     near_other_group, open_edges,
+                       near_tolerance,  near_index ? &*near_index : nullptr,
+                       options,         !options.allow_proxy};
       // Proxies are built in a second pass over the whole level: with them, nothing is kept.
       if (options.allow_proxy) fresh.assign(groups.size(), 1);
       std::vector<uint32_t> to_build;

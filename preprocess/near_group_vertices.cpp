@@ -37,6 +37,9 @@ NearVertexIndex::NearVertexIndex(std::span<const glm::vec3> positions,
                                             [&](uint32_t) { return !(has_neighbour[i] = 1); });
                       }
                     });
+  near_any_.assign(positions.size(), 0);
+  for (size_t i = 0; i < grid_.size(); ++i)
+    if (has_neighbour[i]) near_any_[grid_.vertex(i)] = 1;
   constexpr size_t kMostPairsPerVertex = 16;
   const size_t most_pairs = kMostPairsPerVertex * grid_.size();
   for (size_t i = 0; i < grid_.size() && !search_each_time_; ++i) {

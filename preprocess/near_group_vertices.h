@@ -37,6 +37,8 @@ class NearVertexIndex {
                   float tolerance);
 
   float tolerance() const { return tolerance_; }
+  // Whether vertex v (an index into positions) has another indexed vertex within the tolerance.
+  bool hasNeighbour(uint32_t v) const { return v < near_any_.size() && near_any_[v] != 0; }
 
   // For each indexed vertex whose group (owner[v]) is a single group, sets near[v] = 1 when a
   // vertex of another group, or a shared one (owner `multi`), lies within the tolerance on every
@@ -52,6 +54,7 @@ class NearVertexIndex {
   // on one spot) the list is left empty and each marking searches the grid again.
   std::vector<std::pair<uint32_t, uint32_t>> pairs_;
   bool search_each_time_ = false;
+  std::vector<uint8_t> near_any_;  // per vertex of positions: has a neighbour within tolerance
 };
 
 // One-shot form of the index: build it and mark.
