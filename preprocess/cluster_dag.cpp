@@ -22,6 +22,7 @@
 #include "locked_vertex_clustering.h"
 #include "near_group_vertices.h"
 #include "repeated_triangles.h"
+#include "rim_join.h"
 #include "union_find.h"
 
 namespace tw {
@@ -139,8 +140,9 @@ struct LevelContext {
   const std::vector<uint8_t>& near_other_group;    // within the package's grid error of another
                                                    // group's vertex (near_group_vertices.h)
   const std::vector<uint64_t>& open_edges;  // locked open edges of the first front, sorted
-  float near_tolerance;  // what the package's grid will not tell apart (0: exact positions)
-  const NearVertexIndex* near_index;  // the level's vertex pairs within it (nullptr: none)
+  // The level's vertex pairs within what the package's grid will not tell apart (nullptr: exact
+  // positions, no grid).
+  const NearVertexIndex* near_index;
   const DagOptions& options;
   // false: a group that wants a far proxy (options.allow_proxy) only says so (GroupOutcome::
   // proxy_wanted) and keeps its best result without one. See the level loop.
@@ -215,63 +217,6 @@ struct LocalIndexMap {
   }
 };
 
-// Joins the rim vertices of a group (on an edge not used exactly twice) that `may_join` accepts
-// and that lie within `tolerance` of each other on every axis onto the smallest of them,
-// dropping the triangles that collapse (and their ids). Returns how far a vertex moved (0 when
-// none did).
-template <typename MayJoin>
-float joinNearRims(const std::vector<glm::vec3>& lpos, std::vector<uint32_t>& ltris,
-                   std::vector<uint32_t>& ids, MayJoin&& may_join, float tolerance) {
-  if (!(tolerance > 0.0f)) return 0.0f;
-  std::vector<uint32_t> candidates;
-  for (uint32_t v = 0; v < lpos.size(); ++v)
-    if (may_join(v)) candidates.push_back(v);
-  if (candidates.size() < 2) return 0.0f;
-  std::vector<uint32_t> rims;
-  std::vector<uint8_t> candidate(lpos.size(), 0);
-  for (uint32_t v : candidates) candidate[v] = 1;
-  for (const EdgeCount& e : countEdges(ltris, lpos.size()))
-    if (e.count != 2)
-      for (uint32_t v : {uint32_t(e.key >> 32), uint32_t(e.key)})
-        if (candidate[v]) rims.push_back(v);
-  if (rims.size() < 2) return 0.0f;
-  std::sort(rims.begin(), rims.end());
-  rims.erase(std::unique(rims.begin(), rims.end()), rims.end());
-  const VertexCellGrid grid(lpos, rims, tolerance);
-  UnionFind joined(uint32_t(lpos.size()));
-  bool any = false;
-  for (uint32_t v : rims)
-    grid.forEachWithin(lpos[v], v, [&](uint32_t w) {
-      joined.unite(v, w);
-      any = true;
-      return true;
-    });
-  if (!any) return 0.0f;
-  // Each set onto its smallest vertex.
-  std::vector<uint32_t> onto(lpos.size());
-  std::iota(onto.begin(), onto.end(), 0u);
-  std::vector<uint32_t> smallest(lpos.size(), UINT32_MAX);
-  for (uint32_t v : rims) smallest[joined.find(v)] = std::min(smallest[joined.find(v)], v);
-  float moved = 0.0f;
-  for (uint32_t v : rims) {
-    onto[v] = smallest[joined.find(v)];
-    const glm::vec3 d = glm::abs(lpos[v] - lpos[onto[v]]);
-    moved = std::max({moved, d.x, d.y, d.z});
-  }
-  size_t kept = 0;
-  for (size_t t = 0; t < ids.size(); ++t) {
-    const uint32_t a = onto[ltris[3 * t]], b = onto[ltris[3 * t + 1]], c = onto[ltris[3 * t + 2]];
-    if (a == b || b == c || a == c) continue;
-    ltris[3 * kept] = a;
-    ltris[3 * kept + 1] = b;
-    ltris[3 * kept + 2] = c;
-    ids[kept++] = ids[t];
-  }
-  ltris.resize(3 * kept);
-  ids.resize(kept);
-  return moved * std::sqrt(3.0f);
-}
-
 GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster>& work,
                           const std::vector<uint32_t>& members) {
   const DagOptions& options = ctx.options;
@@ -317,16 +262,15 @@ GroupOutcome processGroup(const LevelContext& ctx, const std::vector<WorkCluster
            ctx.near_other_group[l2g[local]];
   };
 
-  // Rims of the group that almost meet without being one vertex (two parts' rims within the
-  // package's grid error, or a seam the simplification below left a hair open) are joined first:
-  // the package decodes them, and `verify` and the eye see them, as one. Left apart, the
-  // simplification may move one side and not the other and open a gap the fine level did not
-  // show.
-  // Only vertices the level's index saw near another are candidates (most groups have none).
-  auto mayJoin = [&](uint32_t local) {
-    return ctx.near_index && ctx.near_index->hasNeighbour(l2g[local]) && !isPinned(local);
-  };
-  const float joined_m = joinNearRims(lpos, ltris, gids, mayJoin, ctx.near_tolerance);
+  // Rims of the group that almost meet are joined first (rim_join.h). Only vertices the level's
+  // near-vertex index saw near another are candidates (most groups have none).
+  float joined_m = 0.0f;
+  if (ctx.near_index) {
+    std::vector<uint8_t> may_join(vcount, 0);
+    for (uint32_t v = 0; v < vcount; ++v)
+      may_join[v] = ctx.near_index->hasNeighbour(l2g[v]) && !isPinned(v);
+    joined_m = joinNearRims(lpos, ltris, gids, may_join, ctx.near_index->tolerance());
+  }
 
   const EdgeCounts in = countEdges(ltris, vcount);
   std::vector<uint64_t> shared;  // edges whose triangle count must not change
@@ -1081,11 +1025,9 @@ void continueClusterDag(ClusterDag& dag, const std::vector<glm::vec3>& positions
           near_index.emplace(level_positions, level_vertices, tolerance);
         near_index->markNearOtherGroups(level_positions, vertex_owner, kMulti, near_other_group);
       }
-      const float near_tolerance = std::max(attempt_tolerance, 0.0f);  // -1 before the first
       LevelContext ctx{level_positions, vertex_owner, shared_edges,
                        open_vertex,     near_other_group, open_edges,
-                       near_tolerance,  near_index ? &*near_index : nullptr,
-                       options,         !options.allow_proxy};
+                       near_index ? &*near_index : nullptr, options, !options.allow_proxy};
       // Proxies are built in a second pass over the whole level: with them, nothing is kept.
       if (options.allow_proxy) fresh.assign(groups.size(), 1);
       std::vector<uint32_t> to_build;

@@ -19,6 +19,8 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "closest_on_triangle.h"
+
 namespace tw {
 
 namespace {
@@ -146,33 +148,6 @@ Soup canonicalize(const Soup& raw, const glm::vec3& center) {
   return out;
 }
 
-// Closest point on triangle abc to p (Voronoi-region walk over vertices, edges and face).
-glm::vec3 closestOnTriangle(const glm::vec3& p, const glm::vec3& a, const glm::vec3& b,
-                            const glm::vec3& c) {
-  const glm::vec3 ab = b - a, ac = c - a, ap = p - a;
-  const float d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0.0f && d2 <= 0.0f) return a;
-  const glm::vec3 bp = p - b;
-  const float d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0f && d4 <= d3) return b;
-  const float vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) return a + ab * (d1 / (d1 - d3));
-  const glm::vec3 cp = p - c;
-  const float d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0f && d5 <= d6) return c;
-  const float vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) return a + ac * (d2 / (d2 - d6));
-  const float va = d3 * d6 - d5 * d4;
-  if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f)
-    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const float denom = va + vb + vc;
-  if (!(std::abs(denom) > 0.0f)) {  // degenerate triangle: nearest of its three edges' ends
-    float da = glm::dot(p - a, p - a), db = glm::dot(p - b, p - b), dc = glm::dot(p - c, p - c);
-    return da <= db && da <= dc ? a : (db <= dc ? b : c);
-  }
-  const float v = vb / denom, w = vc / denom;
-  return a + ab * v + ac * w;
-}
 
 // Exact nearest-triangle queries over a soup: a dense grid of buckets (each triangle in every
 // cell its box overlaps), searched ring by ring until no closer cell can remain.

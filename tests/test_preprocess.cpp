@@ -309,6 +309,17 @@ TEST(Preprocess, RejectsBadArguments) {
 namespace tw {
 namespace {
 
+// Two triangles per quad between consecutive rings of an open tube: rings + 1 rings of `sides`
+// vertices each, ring after ring.
+void appendTubeQuads(std::vector<uint32_t>& indices, int rings, int sides) {
+  for (int r = 0; r < rings; ++r)
+    for (int s = 0; s < sides; ++s) {
+      const uint32_t a = r * sides + s, b = r * sides + (s + 1) % sides;
+      const uint32_t c = a + sides, d = b + sides;
+      indices.insert(indices.end(), {a, b, d, a, d, c});
+    }
+}
+
 // Uncapped pipes (open at both ends, as CAD exports them) spread over several bricks. Only the
 // brick seams may be locked: if the pipes' own open ends were locked too, no pipe could ever be
 // simplified or dropped and the levels would stall. The package must still be crack-free.
@@ -331,12 +342,7 @@ void writePipesAndStubs(const fs::path& input) {
           const float a = 6.2831853f * s / kSides;
           mesh.positions.push_back({0.5f * r, 0.2f * std::cos(a), 0.2f * std::sin(a)});
         }
-      for (int r = 0; r < kRings; ++r)
-        for (int s = 0; s < kSides; ++s) {
-          const uint32_t a = r * kSides + s, b = r * kSides + (s + 1) % kSides;
-          const uint32_t c = a + kSides, d = b + kSides;
-          mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-        }
+      appendTubeQuads(mesh.indices, kRings, kSides);
       pipe.geometry = std::move(mesh);
       writer.onObject(pipe);
     }
@@ -354,10 +360,7 @@ void writePipesAndStubs(const fs::path& input) {
           const float a = 6.2831853f * s / kSides;
           mesh.positions.push_back({0.05f * std::cos(a), 0.05f * std::sin(a), 0.1f * r});
         }
-      for (int s = 0; s < kSides; ++s) {
-        const uint32_t a = s, b = (s + 1) % kSides, c = a + kSides, d = b + kSides;
-        mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-      }
+      appendTubeQuads(mesh.indices, 1, kSides);
       stub.geometry = std::move(mesh);
       writer.onObject(stub);
     }
@@ -449,12 +452,7 @@ void writePipeRuns(const fs::path& input, float gap) {
             const float x = r == kRings ? kPartLength - gap : kPartLength * float(r) / kRings;
             mesh.positions.push_back({x, 0.3f * std::cos(a), 0.3f * std::sin(a)});
           }
-        for (int r = 0; r < kRings; ++r)
-          for (int s = 0; s < kSides; ++s) {
-            const uint32_t a = r * kSides + s, b = r * kSides + (s + 1) % kSides;
-            const uint32_t c = a + kSides, d = b + kSides;
-            mesh.indices.insert(mesh.indices.end(), {a, b, d, a, d, c});
-          }
+        appendTubeQuads(mesh.indices, kRings, kSides);
         object.geometry = std::move(mesh);
         writer.onObject(object);
       }

@@ -15,6 +15,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "format_error.h"
+#include "ifc_colours.h"
 #include "plane_arcs.h"
 #include "profile_prism.h"
 #include "solid_cut.h"
@@ -40,12 +41,10 @@ struct ItemError {
 class IfcImporter {
  public:
   IfcImporter(const Step21File& file, SceneSink& sink, const ReadOptions& options)
-      : f_(file), sink_(sink), options_(options) {}
+      : f_(file), sink_(sink), options_(options), colours_(file) {}
 
   void run() {
     readUnits();
-    readStyles();
-    readMaterialColours();
     readLayers();
     readOpenings();
     std::vector<uint64_t> ids;
@@ -131,132 +130,7 @@ class IfcImporter {
     }
   }
 
-  // --- Styles and layers ---------------------------------------------------------------------
-  std::optional<uint32_t> surfaceColour(const Step21Instance* style, int depth) const {
-    if (!style || depth > 4) return std::nullopt;
-    if (style->type == "IFCPRESENTATIONSTYLEASSIGNMENT") {
-      for (const Step21Value& s : arg(style, 0).items)
-        if (auto c = surfaceColour(f_.deref(s), depth + 1)) return c;
-      return std::nullopt;
-    }
-    if (style->type != "IFCSURFACESTYLE") return std::nullopt;
-    for (const Step21Value& s : arg(style, 2).items) {
-      const Step21Instance* shading = f_.deref(s);
-      if (!shading || (shading->type != "IFCSURFACESTYLERENDERING" &&
-                       shading->type != "IFCSURFACESTYLESHADING"))
-        continue;
-      const Step21Instance* rgb = f_.deref(arg(shading, 0));
-      if (!rgb || rgb->type != "IFCCOLOURRGB") continue;
-      auto channel = [&](size_t i) {
-        return uint32_t(std::lround(std::clamp(numberOf(arg(rgb, i), 0.7), 0.0, 1.0) * 255.0));
-      };
-      const double transparency = std::clamp(numberOf(arg(shading, 1), 0.0), 0.0, 1.0);
-      const uint32_t alpha = uint32_t(std::lround((1.0 - transparency) * 255.0));
-      return channel(1) | (channel(2) << 8) | (channel(3) << 16) | (std::max(alpha, 1u) << 24);
-    }
-    return std::nullopt;
-  }
-
-  void readStyles() {
-    for (uint64_t id : f_.idsOfType("IFCSTYLEDITEM")) {
-      const Step21Instance* styled = f_.find(id);
-      const Step21Value& item = arg(styled, 0);
-      if (item.kind != Kind::Ref) continue;
-      for (const Step21Value& s : arg(styled, 1).items)
-        if (auto c = surfaceColour(f_.deref(s), 0)) {
-          colours_.emplace(item.ref, *c);
-          break;
-        }
-    }
-  }
-
-  // A product whose items carry no style takes its material's colour, else its type's
-  // (IfcRelDefinesByType), else that of the type whose representation map it draws:
-  // IfcRelAssociatesMaterial names the material (directly, or through a layer set, profile set,
-  // constituent set or list: the first one with a colour), and IfcMaterialDefinitionRepresentation
-  // gives a material its styled items. Authoring tools often colour walls and slabs this way only.
-  void readMaterialColours() {
-    std::unordered_map<uint64_t, uint32_t> of_material;
-    for (uint64_t id : f_.idsOfType("IFCMATERIALDEFINITIONREPRESENTATION")) {
-      const Step21Instance* definition = f_.find(id);
-      const Step21Value& material = arg(definition, 3);
-      if (material.kind != Kind::Ref || of_material.count(material.ref)) continue;
-      if (auto c = styledRepresentationsColour(arg(definition, 2)))
-        of_material.emplace(material.ref, *c);
-    }
-    if (of_material.empty()) return;
-    for (uint64_t id : f_.idsOfType("IFCRELASSOCIATESMATERIAL")) {
-      const Step21Instance* rel = f_.find(id);
-      const auto c = materialColour(arg(rel, 5), of_material, 0);
-      if (!c) continue;
-      for (const Step21Value& object : arg(rel, 4).items)
-        if (object.kind == Kind::Ref) material_colour_.emplace(object.ref, *c);
-    }
-    // A product without a material of its own takes its type's (IfcRelDefinesByType).
-    for (uint64_t id : f_.idsOfType("IFCRELDEFINESBYTYPE")) {
-      const Step21Instance* rel = f_.find(id);
-      const Step21Value& type = arg(rel, 5);
-      auto it = material_colour_.find(type.ref);
-      if (type.kind != Kind::Ref || it == material_colour_.end()) continue;
-      const uint32_t c = it->second;
-      for (const Step21Value& object : arg(rel, 4).items)
-        if (object.kind == Kind::Ref) material_colour_.emplace(object.ref, c);
-    }
-    // A type's representation maps (IfcTypeProduct's seventh attribute) drawn through mapped
-    // items carry the type's material, whichever product maps them.
-    for (const auto& [type, c] : material_colour_) {
-      const Step21Instance* t = f_.find(type);
-      if (!t || t->type.size() < 4 || t->type.compare(t->type.size() - 4, 4, "TYPE") != 0) continue;
-      for (const Step21Value& map : arg(t, 6).items)
-        if (map.kind == Kind::Ref) map_colour_.emplace(map.ref, c);
-    }
-  }
-
-  // The first surface colour of a list of IfcStyledRepresentations' styled items.
-  std::optional<uint32_t> styledRepresentationsColour(const Step21Value& representations) const {
-    for (const Step21Value& r : representations.items) {
-      const Step21Instance* rep = f_.deref(r);
-      if (!rep) continue;
-      for (const Step21Value& i : arg(rep, 3).items) {
-        const Step21Instance* styled = f_.deref(i);
-        if (!styled || styled->type != "IFCSTYLEDITEM") continue;
-        for (const Step21Value& s : arg(styled, 1).items)
-          if (auto c = surfaceColour(f_.deref(s), 0)) return c;
-      }
-    }
-    return std::nullopt;
-  }
-
-  // The colour of an IfcMaterialSelect (a reference): a material's own, else the first of its
-  // parts' that has one (a wall's layers from the first, the side a viewer usually sees).
-  std::optional<uint32_t> materialColour(const Step21Value& select,
-                                         const std::unordered_map<uint64_t, uint32_t>& of_material,
-                                         int depth) const {
-    const Step21Instance* m = f_.deref(select);
-    if (!m || depth > 6) return std::nullopt;
-    const std::string& t = m->type;
-    if (t == "IFCMATERIAL") {
-      auto it = of_material.find(select.ref);
-      return it == of_material.end() ? std::nullopt : std::optional<uint32_t>(it->second);
-    }
-    auto one = [&](const Step21Value& part) { return materialColour(part, of_material, depth + 1); };
-    auto first = [&](const Step21Value& list) -> std::optional<uint32_t> {
-      for (const Step21Value& part : list.items)
-        if (auto c = one(part)) return c;
-      return std::nullopt;
-    };
-    if (t == "IFCMATERIALLAYERSETUSAGE" || t == "IFCMATERIALPROFILESETUSAGE" ||
-        t == "IFCMATERIALPROFILESETUSAGETAPERING" || t == "IFCMATERIALLAYER" ||
-        t == "IFCMATERIALLAYERWITHOFFSETS")
-      return one(arg(m, 0));
-    if (t == "IFCMATERIALLAYERSET" || t == "IFCMATERIALLIST") return first(arg(m, 0));
-    if (t == "IFCMATERIALPROFILE" || t == "IFCMATERIALPROFILEWITHOFFSETS" ||
-        t == "IFCMATERIALCONSTITUENT")
-      return one(arg(m, 2));
-    if (t == "IFCMATERIALPROFILESET" || t == "IFCMATERIALCONSTITUENTSET") return first(arg(m, 2));
-    return std::nullopt;
-  }
-
+  // --- Layers --------------------------------------------------------------------------------
   void readLayers() {
     for (const char* type : {"IFCPRESENTATIONLAYERASSIGNMENT", "IFCPRESENTATIONLAYERWITHSTYLE"})
       for (uint64_t id : f_.idsOfType(type)) {
@@ -356,10 +230,8 @@ class IfcImporter {
         if (item.kind == Kind::Ref) importItem(item.ref, glm::dmat4(1.0), 0);
       }
     cutOpenings(product_id, world);
-    if (colour_ == 0) {
-      auto it = material_colour_.find(product_id);
-      colour_ = it != material_colour_.end() ? it->second : map_colour_found_.value_or(0);
-    }
+    if (colour_ == 0)
+      colour_ = colours_.ofMaterial(product_id).value_or(map_colour_found_.value_or(0));
     if (!options_.cad_primitives) meshPrimitives();
     if (mesh_.indices.empty() && primitives_.empty()) return;
 
@@ -515,7 +387,7 @@ class IfcImporter {
     if (!item) return skipped(id, product_type_, "the item is missing");
     if (depth > kMaxDepth) return skipped(id, product_type_, "mapped items nested too deep");
     if (colour_ == 0)
-      if (auto it = colours_.find(id); it != colours_.end()) colour_ = it->second;
+      if (auto c = colours_.ofItem(id)) colour_ = *c;
     try {
       const std::string& t = item->type;
       if (t == "IFCEXTRUDEDAREASOLID") extruded(*item, local);
@@ -541,8 +413,7 @@ class IfcImporter {
     const Step21Instance* source = f_.deref(arg(&item, 0));
     const Step21Instance* op = f_.deref(arg(&item, 1));
     if (!source || source->type != "IFCREPRESENTATIONMAP") throw ItemError{"no representation map"};
-    if (auto it = map_colour_.find(arg(&item, 0).ref); it != map_colour_.end() && !map_colour_found_)
-      map_colour_found_ = it->second;
+    if (!map_colour_found_) map_colour_found_ = colours_.ofRepresentationMap(arg(&item, 0).ref);
     glm::dmat4 target(1.0);
     if (op && op->type.rfind("IFCCARTESIANTRANSFORMATIONOPERATOR3D", 0) == 0) {
       const glm::dvec3 origin = point(f_.deref(arg(op, 2)));
@@ -1040,9 +911,7 @@ class IfcImporter {
   const ReadOptions& options_;
   double length_ = 1.0;  // metres per file length unit
   double angle_ = 1.0;   // radians per file angle unit
-  std::unordered_map<uint64_t, uint32_t> colours_;          // styled item -> colour
-  std::unordered_map<uint64_t, uint32_t> material_colour_;  // product or type -> its material's
-  std::unordered_map<uint64_t, uint32_t> map_colour_;  // representation map -> its type's material's
+  const IfcColours colours_;
   std::unordered_map<uint64_t, std::string> layer_of_;
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;

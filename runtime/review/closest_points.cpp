@@ -1,11 +1,13 @@
 // Closest points of segments, triangles and cylinders. See closest_points.h.
 //
-// The segment and point-triangle cases follow the classic region analysis (Ericson, "Real-Time
-// Collision Detection", 5.1.5 and 5.1.9), written here in double precision.
+// The segment case follows the classic region analysis (Ericson, "Real-Time Collision
+// Detection", 5.1.9) in double precision; the point-triangle case is formats/closest_on_triangle.h.
 #include "closest_points.h"
 
 #include <algorithm>
 #include <cmath>
+
+#include "closest_on_triangle.h"
 
 namespace tw {
 namespace {
@@ -60,27 +62,8 @@ SegmentClosest closestOnSegments(const glm::dvec3& p0, const glm::dvec3& p1, con
   return {pair(p0 + d1 * s, q0 + d2 * t), s, t};
 }
 
-glm::dvec3 closestOnTriangle(const glm::dvec3& p, const Triangle3d& tri) {
-  const glm::dvec3 &a = tri[0], &b = tri[1], &c = tri[2];
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return a;
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
-    return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
-  const double sum = va + vb + vc;
-  if (!(sum > 0.0)) return a;  // degenerate triangle: its vertices and edges were tried above
-  return a + ab * (vb / sum) + ac * (vc / sum);
+glm::dvec3 closestOnTriangle(const glm::dvec3& p, const Triangle3d& t) {
+  return closestOnTriangle(p, t[0], t[1], t[2]);
 }
 
 PointPair closestBetweenTriangles(const Triangle3d& s, const Triangle3d& t) {
