@@ -717,6 +717,15 @@ bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideSt
   return true;
 }
 
+bool planPatchGrid(const NurbsPatch& patch, float chordal_tolerance, uint32_t& n, uint32_t& m) {
+  if (!validateNurbsPatch(patch).empty()) return false;
+  const PatchEval e{&patch, nurbsDomain(patch)};
+  const double tolerance =
+      std::isfinite(chordal_tolerance) && chordal_tolerance > 0.0f ? chordal_tolerance : INFINITY;
+  planGrid(sampleCurvature(e), tolerance, n, m);
+  return true;
+}
+
 uint64_t nurbsConformingTriangleCount(const NurbsPatchSet& patches, float chordal_tolerance) {
   ConformingTessellationStats stats;
   TriangleMesh scratch;

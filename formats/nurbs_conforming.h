@@ -54,6 +54,12 @@ bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideSt
                            float chordal_tolerance, bool flip, TriangleMesh& out,
                            ConformingTessellationStats* stats = nullptr);
 
+// The interior grid the tessellator plans for `patch` at `chordal_tolerance`: `n` x `m` segments,
+// uniform over the patch's parameter rectangle, so that the surface between the grid's triangles
+// stays within the tolerance (at least 2 a direction). Returns false, setting nothing, for an
+// invalid patch. A B-rep importer uses it for trimmed faces, clipping the grid to the face's wires.
+bool planPatchGrid(const NurbsPatch& patch, float chordal_tolerance, uint32_t& n, uint32_t& m);
+
 // The number of triangles tessellateNurbsConforming makes of `patches`. Unlike the per-patch
 // count (nurbsTriangleCount), it tessellates the set to know: borders shared with a neighbour
 // take that neighbour's points. A scene holds few NURBS sets (hulls, equipment shells), each a

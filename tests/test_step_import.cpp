@@ -108,8 +108,9 @@ TEST(StepImport, ClosedSolidOfBSplineFacesIsWatertight) {
   EXPECT_EQ(directed.size(), 2 * edges.size());
 }
 
-// Its untrimmed B-spline faces are tessellated by the conforming tessellator on the B-rep's edge
-// nodes, and the shell stays closed: OpenMesh's check finds no boundary edge, T-vertex, refused
+// Its B-spline faces are tessellated by the conforming tessellator on the B-rep's edge nodes (the
+// untrimmed ones zipped to them, the trimmed ones on the planned grid clipped to their wires),
+// and the shell stays closed: OpenMesh's check finds no boundary edge, T-vertex, refused
 // or inconsistently oriented face anywhere in it.
 TEST(StepImport, ConformingBSplineFacesKeepTheShellClosedWithoutTVertices) {
   std::vector<std::string> notes;
@@ -118,8 +119,9 @@ TEST(StepImport, ConformingBSplineFacesKeepTheShellClosedWithoutTVertices) {
   test::CollectingSink sink;
   readStep(sample("Ventilator.stp"), sink, options);
   ASSERT_EQ(notes.size(), 1u);
-  EXPECT_EQ(notes[0], "B-spline faces 189: 31 tessellated by the conforming tessellator on the "
-                      "B-rep's edges, 158 trimmed ones by BRepMesh");
+  EXPECT_EQ(notes[0], "B-spline faces 189 by the conforming tessellator: 31 untrimmed zipped to "
+                      "the B-rep's edge nodes, 158 trimmed on its grid clipped to their wires "
+                      "(refined by BRepMesh's deflection control); 0 by BRepMesh alone");
   ASSERT_EQ(sink.objects.size(), 1u);
   const TriangleMesh& mesh = std::get<TriangleMesh>(sink.objects[0].geometry);
   const PatchMeshReport report = checkPatchMesh(mesh, NurbsPatchSet{});

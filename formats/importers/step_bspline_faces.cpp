@@ -1,4 +1,4 @@
-// Conforming tessellation of untrimmed B-spline faces. See step_bspline_faces.h.
+// Conforming tessellation of untrimmed B-spline faces, and the grid planned for trimmed ones. See step_bspline_faces.h.
 #include "step_bspline_faces.h"
 
 #include <BRepTools.hxx>
@@ -86,6 +86,15 @@ int wireCount(const TopoDS_Face& face) {
 }
 
 }  // namespace
+
+bool planBSplineFaceGrid(const TopoDS_Face& face, double u0, double u1, double v0, double v1,
+                         double deflection, uint32_t& n, uint32_t& m) {
+  if (!(u1 > u0) || !(v1 > v0)) return false;
+  const Handle(Geom_BSplineSurface) surface = restrictedBSpline(face, u0, u1, v0, v1);
+  if (surface.IsNull()) return false;
+  // Curvature does not change under the part's placement: the surface as it is in the file.
+  return planPatchGrid(patchOf(*surface, gp_Trsf(), glm::dvec3(0.0)), float(deflection), n, m);
+}
 
 bool tessellateBSplineFace(const TopoDS_Face& face, const Poly_Triangulation& triangulation,
                            const gp_Trsf& placement, const glm::dvec3& centre,

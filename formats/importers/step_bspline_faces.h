@@ -8,8 +8,8 @@
 // its curvature and the chordal tolerance ask for, zipped to the border by one strip per side.
 // So the borders the B-rep says are shared stay shared (no guessing by distance), the shell stays
 // closed, and no T-vertex appears between a patch and its neighbours, whether they are patches,
-// planes or cones. Trimmed B-spline faces (a wire cutting across the rectangle, holes) keep
-// BRepMesh's triangles.
+// planes or cones. Trimmed B-spline faces (a wire cutting across the rectangle, holes) take the
+// same interior grid clipped to their wires (step_face_mesher.h).
 #pragma once
 
 #include <Poly_Triangulation.hxx>
@@ -33,5 +33,11 @@ bool tessellateBSplineFace(const TopoDS_Face& face, const Poly_Triangulation& tr
                            const gp_Trsf& placement, const glm::dvec3& centre,
                            const std::vector<uint32_t>& node_vertex, double deflection,
                            TriangleMesh& out);
+
+// The conforming tessellator's interior grid for a B-spline (or Bézier) face over its parameter
+// rectangle [u0, u1] x [v0, v1] at `deflection`: `n` x `m` segments, uniform in the parameters.
+// Returns false when the face is not such a surface or the rectangle is empty.
+bool planBSplineFaceGrid(const TopoDS_Face& face, double u0, double u1, double v0, double v1,
+                         double deflection, uint32_t& n, uint32_t& m);
 
 }  // namespace tw

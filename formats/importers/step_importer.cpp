@@ -56,6 +56,7 @@
 #include "face_weld.h"
 #include "format_error.h"
 #include "step_bspline_faces.h"
+#include "step_face_mesher.h"
 #include "step_primitives.h"
 #include "tws_reader.h"
 #include "tws_writer.h"
@@ -134,7 +135,8 @@ struct PartMesh {
   TriangleMesh mesh;
   std::optional<RecognizedPrimitive> primitive;  // instead of the mesh, when the part is one
   uint32_t bspline_faces = 0;     // B-spline and Bezier faces
-  uint32_t conforming_faces = 0;  // of those, tessellated by the conforming tessellator
+  uint32_t conforming_faces = 0;  // of those, untrimmed: zipped to the B-rep's edge nodes
+  uint32_t planned_faces = 0;     // trimmed: on the tessellator's grid clipped to their wires
 };
 
 // Positions are compared within this share of the part's size when recognizing primitives.
@@ -161,7 +163,8 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
   const double deflection =
       fixed_deflection > 0.0 ? fixed_deflection
                              : std::max(1e-6, std::min(kMaxDeflectionM, kRelativeDeflection * diagonal));
-  BRepMesh_IncrementalMesh mesher(shape, deflection, false, kAngularDeflectionRad, false);
+  TopTools_MapOfShape planned_faces;
+  meshShapeFaces(shape, deflection, kAngularDeflectionRad, planned_faces);
 
   // Nodes shared along edges are exact copies, so a weld by exact position joins the faces.
   FaceWeld weld(part.mesh, part.center);
@@ -180,6 +183,7 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
         ++part.conforming_faces;
         continue;
       }
+      if (planned_faces.Contains(face)) ++part.planned_faces;
     }
     weld.addTriangles(*triangulation, face.Orientation() == TopAbs_REVERSED);
   }
@@ -255,11 +259,12 @@ class AssemblyWalker {
   uint32_t objects() const { return next_id_; }
 
   // Over the distinct products: B-spline and Bezier faces, and those tessellated conforming.
-  void faceCounts(uint64_t& bspline, uint64_t& conforming) const {
-    bspline = conforming = 0;
+  void faceCounts(uint64_t& bspline, uint64_t& conforming, uint64_t& planned) const {
+    bspline = conforming = planned = 0;
     for (const auto& [shape, part] : meshes_) {
       bspline += part.bspline_faces;
       conforming += part.conforming_faces;
+      planned += part.planned_faces;
     }
   }
 
@@ -455,12 +460,14 @@ void translate(const std::filesystem::path& path, const std::filesystem::path& s
     if (walker.objects() == 0)
       throw FormatError(file, "STEP model holds no faces to mesh" + quiet.said());
     writer.finish();
-    uint64_t bspline = 0, conforming = 0;
-    walker.faceCounts(bspline, conforming);
+    uint64_t bspline = 0, conforming = 0, planned = 0;
+    walker.faceCounts(bspline, conforming, planned);
     if (bspline > 0)
-      send('N', "B-spline faces " + std::to_string(bspline) + ": " + std::to_string(conforming) +
-                    " tessellated by the conforming tessellator on the B-rep's edges, " +
-                    std::to_string(bspline - conforming) + " trimmed ones by BRepMesh");
+      send('N', "B-spline faces " + std::to_string(bspline) + " by the conforming tessellator: " +
+                    std::to_string(conforming) + " untrimmed zipped to the B-rep's edge nodes, " +
+                    std::to_string(planned) + " trimmed on its grid clipped to their wires (refined by BRepMesh's deflection "
+                    "control); " +
+                    std::to_string(bspline - conforming - planned) + " by BRepMesh alone");
   } catch (const FormatError& e) {
     send('E', e.reason());
   } catch (const Standard_Failure& failure) {
