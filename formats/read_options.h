@@ -13,6 +13,18 @@
 
 namespace tw {
 
+// How the CAD importers turn a B-rep into the scene model; the defaults keep what they can.
+struct CadOptions {
+  // Solids that are primitives of the scene model stay primitives; false meshes everything (to
+  // compare what keeping them saves).
+  bool primitives = true;
+  // The meshing's chordal tolerance in metres; 0: the importer's own rule.
+  double tolerance_m = 0.0;
+  // B-spline and Bézier faces by the conforming NURBS tessellator (STEP); false leaves them to
+  // OpenCASCADE's own mesher, as a reference to compare against.
+  bool conforming_bspline = true;
+};
+
 struct ReadOptions {
   Progress* progress = nullptr;  // reports bytes read; may be nullptr
   // Large meshes are handed to the sink in parts of at most this many triangles, so a reader's
@@ -24,11 +36,8 @@ struct ReadOptions {
   // The file's up axis (up_axis.h); readScene turns Y-up files Z up. Auto: Y for glTF, Z for
   // everything else.
   UpAxis up = UpAxis::Auto;
-  // CAD importers (STEP, IFC): solids that are primitives of the scene model stay primitives;
-  // false meshes everything (to compare what keeping them saves).
-  bool cad_primitives = true;
-  // CAD importers: the meshing's chordal tolerance in metres; 0: the importer's own rule.
-  double cad_tolerance_m = 0.0;
+  // What the CAD importers (STEP, IFC) keep and how they mesh the rest.
+  CadOptions cad;
   // Where a reader reports what it skipped and read on past ("file: entity #12: reason"): a
   // product whose geometry failed, an entity the file garbled. Empty: one line on stderr each.
   std::function<void(const std::string&)> warn;

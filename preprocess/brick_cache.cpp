@@ -71,11 +71,12 @@ void RunHash::addBrickingOptions(const BrickingOptions& options) {
   // Only when set, so that a run without exclusions keeps the hash it always had.
   for (const std::string& name : options.exclude_layers) addString("exclude-layer:" + name);
   if (options.up != UpAxis::Auto) addString(std::string("up:") + upAxisName(options.up));
-  if (!options.cad_primitives) addString("cad-primitives:off");
-  if (options.cad_tolerance_m > 0.0) {
+  if (!options.cad.primitives) addString("cad-primitives:off");
+  if (options.cad.tolerance_m > 0.0) {
     addString("cad-tolerance");
-    addValue(options.cad_tolerance_m);
+    addValue(options.cad.tolerance_m);
   }
+  if (!options.cad.conforming_bspline) addString("cad-bspline:brepmesh");
 }
 
 uint64_t RunHash::digest() const { return XXH3_64bits_digest(&state_->xxh); }

@@ -292,8 +292,7 @@ BrickCache PreprocessRun::openCache() {
   bricking_.progress = progress_;
   bricking_.exclude_layers = options_.exclude_layers;
   bricking_.up = options_.up;
-  bricking_.cad_primitives = options_.cad_primitives;
-  bricking_.cad_tolerance_m = options_.cad_tolerance_m;
+  bricking_.cad = options_.cad;
   dag_options_.cluster_size = options_.cluster_size;
 
   RunHash hash;
@@ -319,7 +318,7 @@ void PreprocessRun::brickInputs() {
     clock_.start("survey");
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
                                      bricking_.exclude_layers, bricking_.up,
-                                     bricking_.cad_primitives, bricking_.cad_tolerance_m,
+                                     bricking_.cad,
                                      readerVertexBytes(bricking_.memory_budget_bytes),
                                      bricking_.work_dir);
     throwIfCancelled(progress_);

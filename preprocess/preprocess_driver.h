@@ -21,6 +21,7 @@
 
 #include "cluster_dag.h"
 #include "progress.h"
+#include "read_options.h"
 #include "up_axis.h"
 
 namespace tw {
@@ -51,8 +52,7 @@ struct PreprocessOptions {
   double view_cell_size_m = 0.0;    // 0: chosen from the bounds (view_cells.h)
   bool parametric_occluders = true;  // parametric clusters are candidates (visibility_build.h)
   UpAxis up = UpAxis::Auto;          // the inputs' up axis (formats/up_axis.h)
-  bool cad_primitives = true;        // CAD importers keep primitive solids (ReadOptions)
-  double cad_tolerance_m = 0.0;      // CAD importers' chordal tolerance; 0: their own rule
+  CadOptions cad;                    // how CAD importers mesh (ReadOptions::cad)
 };
 
 // What the visibility stage built (all zero when it was off or found no mesh clusters).

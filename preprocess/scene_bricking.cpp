@@ -664,7 +664,7 @@ uint64_t effectiveMaxBrickTriangles(const BrickingOptions& options) {
 
 SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float nurbs_tolerance,
                         Progress* progress, const std::vector<std::string>& exclude_layers,
-                        UpAxis up, bool cad_primitives, double cad_tolerance_m,
+                        UpAxis up, const CadOptions& cad,
                         uint64_t vertex_memory_bytes, const std::filesystem::path& spill_dir) {
   SceneSurvey survey;
   for (const auto& input : inputs) survey.input_bytes += fileBytes(input);
@@ -681,8 +681,7 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs, float 
     read_options.progress = &sub;
     read_options.exclude_layers = exclude_layers;
     read_options.up = up;
-    read_options.cad_primitives = cad_primitives;
-    read_options.cad_tolerance_m = cad_tolerance_m;
+    read_options.cad = cad;
     read_options.vertex_memory_bytes = vertex_memory_bytes;
     read_options.spill_dir = spill_dir;
     readScene(input, fan, read_options);
@@ -752,8 +751,7 @@ BrickedScene brickScene(const std::vector<std::filesystem::path>& inputs, const 
     read_options.progress = &sub;
     read_options.exclude_layers = options.exclude_layers;
     read_options.up = options.up;
-    read_options.cad_primitives = options.cad_primitives;
-    read_options.cad_tolerance_m = options.cad_tolerance_m;
+    read_options.cad = options.cad;
     read_options.warn = [](const std::string&) {};  // the survey's reading reported them
     read_options.vertex_memory_bytes = readerVertexBytes(options.memory_budget_bytes);
     read_options.spill_dir = scene.work_dir;

@@ -35,6 +35,7 @@
 
 #include "bounds.h"
 #include "progress.h"
+#include "read_options.h"
 #include "scene.h"
 #include "tessellate.h"
 #include "up_axis.h"
@@ -56,8 +57,7 @@ struct BrickingOptions {
   Progress* progress = nullptr;
   std::vector<std::string> exclude_layers;  // objects of these layers are left out (by name)
   UpAxis up = UpAxis::Auto;                 // the inputs' up axis (ReadOptions::up)
-  bool cad_primitives = true;               // ReadOptions::cad_primitives
-  double cad_tolerance_m = 0.0;             // ReadOptions::cad_tolerance_m
+  CadOptions cad;                           // ReadOptions::cad
 };
 
 // The brick limit actually used for `options` (resolves max_brick_triangles == 0).
@@ -85,8 +85,8 @@ SceneSurvey surveyScene(const std::vector<std::filesystem::path>& inputs,
                         float nurbs_tolerance = kDefaultChordalTolerance,
                         Progress* progress = nullptr,
                         const std::vector<std::string>& exclude_layers = {},
-                        UpAxis up = UpAxis::Auto, bool cad_primitives = true,
-                        double cad_tolerance_m = 0.0, uint64_t vertex_memory_bytes = 0,
+                        UpAxis up = UpAxis::Auto, const CadOptions& cad = {},
+                        uint64_t vertex_memory_bytes = 0,
                         const std::filesystem::path& spill_dir = {});
 
 // The share of the memory budget a mesh reader may keep its vertex table in before it spills

@@ -133,6 +133,22 @@ TEST(StepImport, ConformingBSplineFacesKeepTheShellClosedWithoutTVertices) {
   EXPECT_TRUE(report.ok()) << report.first_problem;
 }
 
+// `--cad-bspline brepmesh`: the reference the fidelity bench compares against leaves every
+// B-spline face to OpenCASCADE's own mesher.
+TEST(StepImport, BSplineFacesCanBeLeftToOpenCascadesOwnMesher) {
+  std::vector<std::string> notes;
+  ReadOptions options;
+  options.note = [&notes](const std::string& note) { notes.push_back(note); };
+  options.cad.conforming_bspline = false;
+  test::CollectingSink sink;
+  readStep(sample("Ventilator.stp"), sink, options);
+  ASSERT_EQ(notes.size(), 1u);
+  EXPECT_NE(notes[0].find(": 0 untrimmed zipped to the B-rep's edge nodes, 0 trimmed on its grid"),
+            std::string::npos) << notes[0];
+  EXPECT_NE(notes[0].find("; 189 by BRepMesh alone"), std::string::npos) << notes[0];
+  EXPECT_NE(sink.triangles(), import(sample("Ventilator.stp")).triangles());
+}
+
 TEST(StepImport, ReadSceneDispatchesByExtensionAndSplitsLargeParts) {
   EXPECT_EQ(sceneFormatOf("a/b.STEP"), SceneFormat::Step);
   EXPECT_EQ(sceneFormatOf("a/b.stp"), SceneFormat::Step);
@@ -198,7 +214,7 @@ TEST(StepImport, SecondReadingReusesTheTranslationUntilTheFileChanges) {
   readStep(copy, changed, quiet);
   EXPECT_EQ(changed.objects.size(), 18u) << "the new content, not the cached scene";
   ReadOptions other_tolerance = quiet;
-  other_tolerance.cad_tolerance_m = 0.0005;
+  other_tolerance.cad.tolerance_m = 0.0005;
   readStep(copy, meshed, other_tolerance);
   EXPECT_NE(meshed.triangles(), changed.triangles()) << "another tolerance translates again";
 }

@@ -164,7 +164,7 @@ TEST(StepPrimitives, RealRodIsACylinderWhereItsMeshIs) {
   test::CollectingSink kept, meshed;
   readStep(file, kept);
   ReadOptions mesh_all;
-  mesh_all.cad_primitives = false;
+  mesh_all.cad.primitives = false;
   readStep(file, meshed, mesh_all);
   ASSERT_EQ(kept.objects.size(), meshed.objects.size());
   int cylinders = 0;

@@ -51,6 +51,7 @@ struct PreprocessArgs {
   std::string up = "auto";
   std::string cad_primitives = "on";
   double cad_tolerance_m = 0.0;
+  std::string cad_bspline = "conforming";
   std::string db;
 };
 
@@ -168,6 +169,11 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
                   "Chordal tolerance in metres for meshing STEP faces (default: min(2 mm, 0.2 % of "
                   "each part's size))")
       ->check(CLI::Range(1e-7, 1.0));
+  cmd->add_option("--cad-bspline", args->cad_bspline,
+                  "STEP B-spline faces by the conforming tessellator, or by OpenCASCADE's own "
+                  "mesher (a reference to compare against): conforming or brepmesh (default "
+                  "conforming)")
+      ->check(CLI::IsMember({"conforming", "brepmesh"}));
   cmd->add_option("--exclude-layer", args->exclude_layers,
                   "Leave the objects of this layer out of the package (repeatable)")
       ->allow_extra_args(false);
@@ -195,8 +201,9 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
     options.parametric_occluders = args->parametric_occluders == "on";
     options.exclude_layers = args->exclude_layers;
     options.up = parseUpAxis(args->up);
-    options.cad_primitives = args->cad_primitives == "on";
-    options.cad_tolerance_m = args->cad_tolerance_m;
+    options.cad.primitives = args->cad_primitives == "on";
+    options.cad.tolerance_m = args->cad_tolerance_m;
+    options.cad.conforming_bspline = args->cad_bspline == "conforming";
     options.database = args->db;
     if (options.database.empty()) options.database = ifcDatabase(options.inputs, options.output);
     PreprocessReport report = runPreprocess(options);

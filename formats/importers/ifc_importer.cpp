@@ -232,7 +232,7 @@ class IfcImporter {
     cutOpenings(product_id, world);
     if (colour_ == 0)
       colour_ = colours_.ofMaterial(product_id).value_or(map_colour_found_.value_or(0));
-    if (!options_.cad_primitives) meshPrimitives();
+    if (!options_.cad.primitives) meshPrimitives();
     if (mesh_.indices.empty() && primitives_.empty()) return;
 
     info.layer = layerIndex(layer.empty() ? product.type : layer);
@@ -363,7 +363,7 @@ class IfcImporter {
     return h;
   }
 
-  // ReadOptions::cad_primitives off: the primitives become triangles of the product's mesh, at
+  // CadOptions::primitives off: the primitives become triangles of the product's mesh, at
   // the scene's default chordal tolerance (what the preprocessor would tessellate them at).
   void meshPrimitives() {
     for (const auto& [local, primitive] : primitives_) {

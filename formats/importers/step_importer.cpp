@@ -150,7 +150,7 @@ std::optional<RecognizedPrimitive> primitiveOfPart(const TopoDS_Shape& shape) {
   return recognizePrimitive(shape, std::max(1e-12, kRelativePrimitiveTolerance * diagonal));
 }
 
-PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
+PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection, bool conforming_bspline) {
   PartMesh part;
   Bnd_Box box;
   BRepBndLib::Add(shape, box);
@@ -164,7 +164,10 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
       fixed_deflection > 0.0 ? fixed_deflection
                              : std::max(1e-6, std::min(kMaxDeflectionM, kRelativeDeflection * diagonal));
   TopTools_MapOfShape planned_faces;
-  meshShapeFaces(shape, deflection, kAngularDeflectionRad, planned_faces);
+  if (conforming_bspline)
+    meshShapeFaces(shape, deflection, kAngularDeflectionRad, planned_faces);
+  else
+    BRepMesh_IncrementalMesh(shape, deflection, false, kAngularDeflectionRad, false);
 
   // Nodes shared along edges are exact copies, so a weld by exact position joins the faces.
   FaceWeld weld(part.mesh, part.center);
@@ -178,7 +181,8 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection) {
     const GeomAbs_SurfaceType kind = GeomAdaptor_Surface(BRep_Tool::Surface(face)).GetType();
     if (kind == GeomAbs_BSplineSurface || kind == GeomAbs_BezierSurface) {
       ++part.bspline_faces;
-      if (tessellateBSplineFace(face, *triangulation, placement, part.center, node_index,
+      if (conforming_bspline &&
+          tessellateBSplineFace(face, *triangulation, placement, part.center, node_index,
                                 deflection, part.mesh)) {
         ++part.conforming_faces;
         continue;
@@ -239,8 +243,9 @@ class AssemblyWalker {
         layers_(XCAFDoc_DocumentTool::LayerTool(doc->Main())),
         sink_(sink),
         max_part_triangles_(std::max<uint32_t>(1, options.max_part_triangles)),
-        keep_primitives_(options.cad_primitives),
-        deflection_m_(options.cad_tolerance_m) {
+        keep_primitives_(options.cad.primitives),
+        deflection_m_(options.cad.tolerance_m),
+        conforming_bspline_(options.cad.conforming_bspline) {
     TDF_LabelSequence layer_labels;
     layers_->GetLayerLabels(layer_labels);
     file_has_layers_ = layer_labels.Length() > 0;
@@ -345,7 +350,7 @@ class AssemblyWalker {
       const TopoDS_Shape unplaced = shape.Located(TopLoc_Location());
       PartMesh part;
       if (keep_primitives_) part.primitive = primitiveOfPart(unplaced);
-      if (!part.primitive) part = meshPart(unplaced, deflection_m_);
+      if (!part.primitive) part = meshPart(unplaced, deflection_m_, conforming_bspline_);
       cached = meshes_.emplace(shape.TShape().get(), std::move(part)).first;
     }
     const PartMesh& part = cached->second;
@@ -380,6 +385,7 @@ class AssemblyWalker {
   uint32_t max_part_triangles_;
   bool keep_primitives_;
   double deflection_m_;  // 0: the per-part rule
+  bool conforming_bspline_;
   bool file_has_layers_ = false;
   uint32_t next_id_ = 0;
   std::map<std::string, uint32_t> layer_index_;
@@ -584,8 +590,9 @@ class TranslationCache {
     const auto size = std::filesystem::file_size(path, ec);
     const auto time = std::filesystem::last_write_time(path, ec).time_since_epoch().count();
     return (ec ? path.string() : canonical.string()) + "|" + std::to_string(size) + "|" +
-           std::to_string(time) + "|" + std::to_string(options.cad_primitives) + "|" +
-           std::to_string(options.cad_tolerance_m) + "|" + std::to_string(options.max_part_triangles);
+           std::to_string(time) + "|" + std::to_string(options.cad.primitives) + "|" +
+           std::to_string(options.cad.tolerance_m) + "|" +
+           std::to_string(options.cad.conforming_bspline) + "|" + std::to_string(options.max_part_triangles);
   }
 
   std::optional<Translation> find(const std::string& key) {

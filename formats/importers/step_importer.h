@@ -16,7 +16,7 @@
 //   layers at all takes the top-level components of the root assembly as layers (a single part
 //   is its own layer);
 // - its geometry: the product's faces meshed by BRepMesh_IncrementalMesh at a linear deflection
-//   of min(2 mm, 0.2 % of the part's bounding diagonal) (or ReadOptions::cad_tolerance_m) and 20
+//   of min(2 mm, 0.2 % of the part's bounding diagonal) (or CadOptions::tolerance_m) and 20
 //   degrees, in metres, Z up. Faces
 //   sharing an edge share its discretization, so the triangles of a closed shell are watertight
 //   once welded by position (the preprocessor's weld does that). A product instanced many times
