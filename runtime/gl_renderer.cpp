@@ -48,8 +48,9 @@ struct GlRenderer::Impl {
   GLuint depth_program = 0;  // occluder pass: depth only, vertices pushed away from the eye
   GLuint outline_program = 0;  // selection outline over the finished frame
   GLuint empty_vertex_array = 0;  // for the outline's screen triangle (no attributes)
-  GLuint pass_buffer = 0;  // uniform buffer: the SurfacePass being drawn
+  GLuint pass_buffer = 0;  // uniform buffer: the SurfacePass being drawn and the sections
   SurfacePass surface_pass = SurfacePass::Opaque;
+  uint32_t section_count = 0;
   GLuint indirect_buffer = 0, draw_data_buffer = 0, color_buffer = 0;
   GLuint state_buffer = 0;  // GpuObjectState per object, as many as colours
   uint32_t object_color_count = 0;
@@ -202,8 +203,8 @@ GlRenderer::GlRenderer(const RendererOptions& options) : impl_(std::make_unique<
       buildProgram(gl::outlineVertexShader(), gl::outlineFragmentShader(), "selection outline");
   glCreateVertexArrays(1, &s.empty_vertex_array);
   glCreateBuffers(1, &s.pass_buffer);
-  const uint32_t opaque_pass[4] = {uint32_t(SurfacePass::Opaque), 0, 0, 0};  // std140: 16 bytes
-  glNamedBufferData(s.pass_buffer, sizeof opaque_pass, opaque_pass, GL_DYNAMIC_DRAW);
+  const gl::SurfacePassBlock opaque_pass{uint32_t(SurfacePass::Opaque), 0, {}, {}};
+  glNamedBufferData(s.pass_buffer, sizeof opaque_pass, &opaque_pass, GL_DYNAMIC_DRAW);
   glCreateBuffers(1, &s.indirect_buffer);
   glCreateBuffers(1, &s.draw_data_buffer);
   glCreateBuffers(1, &s.color_buffer);
@@ -281,6 +282,25 @@ void GlRenderer::setSurfacePass(SurfacePass pass) {
 }
 
 SurfacePass GlRenderer::surfacePass() const { return impl_->surface_pass; }
+
+void GlRenderer::setSections(std::span<const SectionPlane> planes, const glm::dvec3& eye) {
+  Impl& s = *impl_;
+  if (planes.size() > gl::kMaxSectionPlanes)
+    throw std::invalid_argument("GlRenderer::setSections: " + std::to_string(planes.size()) +
+                                " planes, at most " + std::to_string(gl::kMaxSectionPlanes));
+  // Eye-relative, in double until the end: n . (p_eye + eye - point) > 0 removes p_eye.
+  gl::SurfacePassBlock block{};
+  block.section_count = uint32_t(planes.size());
+  for (size_t i = 0; i < planes.size(); ++i)
+    block.planes[i] = glm::vec4(glm::vec3(planes[i].normal),
+                                float(glm::dot(planes[i].normal, eye - planes[i].point)));
+  if (block.section_count == 0 && s.section_count == 0) return;
+  s.section_count = block.section_count;
+  glNamedBufferSubData(s.pass_buffer, offsetof(gl::SurfacePassBlock, section_count),
+                       sizeof block - offsetof(gl::SurfacePassBlock, section_count), &block.section_count);
+}
+
+bool GlRenderer::sectionsActive() const { return impl_->section_count > 0; }
 
 void GlRenderer::bindSurfaceState() const { bindSurfaceState(impl_->fbo); }
 
@@ -419,7 +439,8 @@ void GlRenderer::draw(const GeometryPool& pool, std::span<const DrawItem> items)
   // Culling and the program are GL state, so each combination gets a multi-draw of its own.
   for (auto& batch : s.batches) batch.clear();
   for (const DrawItem& item : items) {
-    const bool cull = item.cull_back || s.options.cull_backfaces;
+    // A section shows the inside of what it cuts: nothing is culled while one is active.
+    const bool cull = (item.cull_back || s.options.cull_backfaces) && s.section_count == 0;
     s.batches[(cull ? 0 : 1) + (item.placement.object_per_triangle ? 2 : 0)].push_back(item);
   }
   for (size_t b = 0; b < s.batches.size(); ++b) drawBatch(pool, s.batches[b], b % 2 == 0, b >= 2);

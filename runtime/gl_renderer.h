@@ -27,6 +27,7 @@
 
 #include "geometry_pool.h"
 #include "object_states.h"
+#include "section_planes.h"
 
 namespace tw {
 
@@ -89,6 +90,13 @@ class GlRenderer {
   // again restores the opaque state (colour, ids and depth written, no blending).
   void setSurfacePass(SurfacePass pass);
   SurfacePass surfacePass() const;
+  // The section planes (section_planes.h, package frame) every surface pass clips by from now
+  // on, seen from `eye` (package frame; call again when the eye moves); empty: none. While any is
+  // active nothing is back-face culled (the cut shows insides) and the inside of a cut solid is
+  // filled in the section colour. Throws std::invalid_argument for more than
+  // kMaxSectionPlanes.
+  void setSections(std::span<const SectionPlane> planes, const glm::dvec3& eye);
+  bool sectionsActive() const;
   static constexpr float kXrayAlpha = 0.22f;
   // The GL state of a surface draw of the current pass into `framebuffer` (the renderer's own
   // targets, or one of the same size and attachments): target, viewport, reversed-Z clip

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include "object_states.h"
+#include "section_planes.h"
 
 namespace tw::gl {
 
@@ -23,7 +24,9 @@ inline constexpr unsigned kTriangleObjectBinding = 1;  // uint object per pool t
 inline constexpr unsigned kObjectColorBinding = 2;     // uint 0xAABBGGRR per object index
 inline constexpr unsigned kObjectStateBinding = 5;     // GpuObjectState per object index
 // Uniform buffer binding points.
-inline constexpr unsigned kSurfacePassBinding = 0;  // uint: the SurfacePass being drawn
+// The SurfacePass being drawn and the section planes (SurfacePassBlock below).
+inline constexpr unsigned kSurfacePassBinding = 0;
+using tw::kMaxSectionPlanes;  // section planes clipping the surface passes at once
 // Uniform locations.
 inline constexpr int kViewProjectionLocation = 0;  // mat4: projection * view rotation
 inline constexpr int kObjectColorCountLocation = 1;  // uint: entries in the colour buffer
@@ -53,6 +56,18 @@ static_assert(sizeof(GpuDrawData) == 32 && offsetof(GpuDrawData, cell_m) == 12 &
                   offsetof(GpuDrawData, first_triangle) == 16 &&
                   offsetof(GpuDrawData, push_m) == 20,
               "GpuDrawData must match the std430 layout of the GLSL struct");
+
+// The surface passes' uniform block (std140, objectColorGlsl): the pass, then the section planes
+// (xyz the unit normal toward the removed side, w the offset, all eye-relative).
+struct SurfacePassBlock {
+  uint32_t surface_pass;
+  uint32_t section_count;
+  uint32_t padding[2];
+  glm::vec4 planes[kMaxSectionPlanes];
+};
+static_assert(offsetof(SurfacePassBlock, planes) == 16 &&
+                  sizeof(SurfacePassBlock) == 16 + 16 * kMaxSectionPlanes,
+              "SurfacePassBlock must match the std140 layout of the GLSL block");
 
 // GL's indirect command for glMultiDrawElementsIndirect (fixed by the GL spec).
 struct DrawElementsIndirectCommand {
@@ -91,6 +106,10 @@ layout(location = 0) uniform mat4 view_projection;
 // tinted, recoloured ones take their override, and in the X-ray pass every object takes the
 // ghost colour (the blending makes it translucent), through objectBaseColor. The pass is one
 // uniform buffer shared by every program (GlRenderer::bindSurfaceState binds it).
+// Sections (section_planes.h) live in the same buffer: eye-relative planes (normal, offset),
+// each removing what lies on its normal's side. Every surface fragment stage discards what a
+// plane removes (sectionClipped) and paints the inside of a cut solid, which it sees as a back
+// face, in the section colour (sectionCap: the back-face method of capping).
 inline std::string objectColorGlsl() {
   static_assert(kObjectColorBinding == 2, "the GLSL below binds the colours at 2");
   static_assert(uint8_t(SurfacePass::Opaque) == 0 && uint8_t(SurfacePass::Xray) == 1);
@@ -100,7 +119,11 @@ struct ObjectState { uint flags; uint color_rgba; };
 layout(std430, binding = )" + std::to_string(kObjectStateBinding) +
          R"() readonly buffer ObjectStates { ObjectState object_states[]; };
 layout(std140, binding = )" + std::to_string(kSurfacePassBinding) +
-         R"() uniform SurfacePassBlock { uint surface_pass; };
+         R"() uniform SurfacePassBlock {
+  uint surface_pass;
+  uint section_count;
+  vec4 section_planes[)" + std::to_string(kMaxSectionPlanes) + R"(];
+};
 layout(location = 1) uniform uint object_color_count;
 const vec4 kGrey = vec4(0.62, 0.62, 0.62, 1.0);
 const vec4 kSelectedTint = vec4(1.0, 0.55, 0.05, 1.0);
@@ -119,6 +142,14 @@ bool objectSkipped(uint object) {
   bool ghosted = (flags & kObjectXray) != 0u && (flags & kObjectSelected) == 0u;
   return ghosted != (surface_pass == 1u);
 }
+bool sectionClipped(vec3 pos_eye) {
+  for (uint i = 0u; i < section_count; ++i)
+    if (dot(section_planes[i].xyz, pos_eye) + section_planes[i].w > 0.0) return true;
+  return false;
+}
+const vec4 kSectionCap = vec4(0.78, 0.22, 0.18, 1.0);
+// Whether a fragment facing away from the eye is the inside of a cut solid (any plane active).
+bool sectionCap(bool back_facing) { return back_facing && section_count > 0u; }
 vec4 objectBaseColor(uint object) {
   if (surface_pass == 1u) return kGhost;
   uint rgba = object < object_color_count ? object_colors[object] : 0u;
@@ -229,7 +260,11 @@ void main() {
   }
 #endif
   if (id != 0u && objectSkipped(id - 1u)) discard;
-  out_color = shadeSurface(base, facetNormal(pos_eye), pos_eye);
+  if (sectionClipped(pos_eye)) discard;
+  // Closed pieces are wound outward (the preprocessor's winding pass), so a back face is the
+  // inside of a solid the section cut open.
+  out_color = sectionCap(!gl_FrontFacing) ? kSectionCap
+                                          : shadeSurface(base, facetNormal(pos_eye), pos_eye);
   out_id = id;
 }
 )";

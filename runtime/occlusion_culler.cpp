@@ -265,8 +265,12 @@ void OcclusionCuller::cullRest(const OcclusionFrame& frame, std::span<const uint
   const int width = frame.renderer->width(), height = frame.renderer->height();
   ensureGl(width, height);
   unsigned depth_source = frame.renderer->depthTexture();
+  // The view cells' occluders are drawn whole, depth only: behind a section they would hide what
+  // the cut shows, so they sit out while one is active.
   const pkg::VisibilityCellRecord* cell =
-      hzb_options_.occluders == HzbOptions::Occluders::Coarse ? cellAt(frame.eye) : nullptr;
+      hzb_options_.occluders == HzbOptions::Occluders::Coarse && !frame.renderer->sectionsActive()
+          ? cellAt(frame.eye)
+          : nullptr;
   if (cell) {
     stats.view_cell = int64_t(cell->grid_index);
     occluder_items_.clear();

@@ -26,6 +26,8 @@
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_queries.h"
+#include "section_planes.h"
+#include "snapshot_camera.h"
 #include "soak_log.h"
 #include "tessellate.h"
 
@@ -72,6 +74,8 @@ struct RenderArgs {
   int hzb_split = BoxTest{}.split_px;
   // Per-object state along the whole path (object_states.h).
   std::vector<std::string> hide_layers;
+  std::vector<std::string> sections;     // X,Y,Z,NX,NY,NZ each
+  std::vector<std::string> section_box;  // MIN MAX, x,y,z each
   std::vector<std::string> isolate_layers;
   std::string isolate_keys;  // FILE or KEY,KEY,...
   std::string select_keys;
@@ -454,6 +458,23 @@ void applyObjectStates(const RenderArgs& args, Walkthrough& walk) {
       states.set(o, kObjectSelected, true);
 }
 
+// --section (each a plane) and --section-box (six planes facing out of the box), world metres.
+std::vector<SectionPlane> sectionPlanes(const RenderArgs& args) {
+  if (args.sections.size() > kMaxUserSectionPlanes)
+    throw std::invalid_argument("--section: " + std::to_string(args.sections.size()) +
+                                " planes, at most " + std::to_string(kMaxUserSectionPlanes));
+  std::vector<SectionPlane> planes;
+  for (const std::string& text : args.sections) planes.push_back(parseSectionPlane(text));
+  if (!args.section_box.empty()) {
+    const glm::dvec3 lo = parseVec3(args.section_box[0]), hi = parseVec3(args.section_box[1]);
+    if (glm::any(glm::greaterThan(lo, hi)))
+      throw std::invalid_argument("--section-box: MIN " + args.section_box[0] +
+                                  " is not below MAX " + args.section_box[1] + " on every axis");
+    for (const SectionPlane& plane : sectionBoxPlanes(lo, hi)) planes.push_back(plane);
+  }
+  return planes;
+}
+
 // Steps: the GL context, the walkthrough over the package, the path rendered frame by frame,
 // the summary printed and, with --out, written beside the frames' statistics.
 void runRender(const RenderArgs& args, const GlobalOptions& global) {
@@ -471,6 +492,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   Walkthrough walk(args.file, options);
   times.open_ms = msSince(open_start);
   applyObjectStates(args, walk);
+  walk.setSections(sectionPlanes(args));
 
   Aabb bounds;
   bounds.add(walk.worldMin());
@@ -594,6 +616,13 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--select", args->select_keys,
                   "Select (tint and outline) the objects with these database keys: FILE or "
                   "K1,K2,...");
+  cmd->add_option("--section", args->sections,
+                  "Cut the model open with a plane X,Y,Z,NX,NY,NZ (world metres; the normal points "
+                  "to the side removed; repeatable, at most 6)")
+      ->allow_extra_args(false);
+  cmd->add_option("--section-box", args->section_box,
+                  "Keep only what lies inside the box MIN MAX (x,y,z each, world metres)")
+      ->expected(2);
   cmd->add_flag("--xray-others", args->xray_others,
                 "Draw the objects not isolated (or, with --select alone, not selected) ghosted "
                 "instead of hiding them");

@@ -299,7 +299,8 @@ struct ParametricInstanceMeshes::Impl {
     if (choice.view.pass != InstancePass::All) part.drawn.push_back({c, i});
     stats.instances_drawn += members;
     if (form.shape == Shape::Box) {
-      cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach), false);
+      if (!choice.view.keep_back_faces)
+        cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach), false);
       appendBoxRow(part.batch, row.record, b, anchor_eye, form, unitMesh(form.shape, form.a, form.b),
                    members, row.axis);
       return;
@@ -319,7 +320,7 @@ struct ParametricInstanceMeshes::Impl {
       ++stats.instances_culled;
       return;
     }
-    if (form.shape != Shape::Point && form.shape != Shape::Ribbon)
+    if (form.shape != Shape::Point && form.shape != Shape::Ribbon && !choice.view.keep_back_faces)
       cullBackFaces(form, b, eyeOutsideSolid(b, -anchor_eye, choice.near_reach),
                     ((b.flags & kRunMember) && eye_clear_of_runs) ||
                         (!(b.flags & kCapped) && tubeInsideHidden(b, -anchor_eye, choice.near_reach)));
@@ -327,7 +328,8 @@ struct ParametricInstanceMeshes::Impl {
     ++stats.instances_drawn;
     if (form.shape == Shape::Profile) {
       FaceCull cull = FaceCull::None;
-      if ((b.flags & kClosedProfile) && eyeOutsideSolid(b, -anchor_eye, choice.near_reach))
+      if ((b.flags & kClosedProfile) && !choice.view.keep_back_faces &&
+          eyeOutsideSolid(b, -anchor_eye, choice.near_reach))
         cull = (b.flags & kMirrored) ? FaceCull::BackOfCw : FaceCull::BackOfCcw;
       part.profiles.push_back({c, i, distance, cull});
       return;

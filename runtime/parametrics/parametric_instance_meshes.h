@@ -78,6 +78,9 @@ struct InstanceLodView {
   // the workers, so it must not change while a frame's expansion runs.
   const ObjectStates* objects = nullptr;
   SurfacePass surface = SurfacePass::Opaque;
+  // A section is active (section_planes.h): it shows the insides of what it cuts, so no back
+  // face is left out of the batch or culled.
+  bool keep_back_faces = false;
 };
 
 struct InstanceLodStats {

@@ -147,6 +147,7 @@ struct ParametricRenderer::Impl {
     lod_view.box_hidden = camera.box_hidden;
     lod_view.objects = camera.objects;
     lod_view.surface = camera.surface;
+    lod_view.keep_back_faces = renderer->sectionsActive();
     return lod_view;
   }
 

@@ -154,8 +154,10 @@ layout(location = 1) out uint out_id;
 )" + shadingGlsl() + R"(
 void main() {
   GpuInstance g = instances[v_instance];
-  out_color = shadeSurface(objectBaseColor(g.object), normalize(v_normal_matrix * v_face_normal),
-                           v_pos_eye);
+  if (sectionClipped(v_pos_eye)) discard;
+  vec3 n = normalize(v_normal_matrix * v_face_normal);
+  out_color = sectionCap(dot(n, v_pos_eye) > 0.0) ? kSectionCap
+                                                  : shadeSurface(objectBaseColor(g.object), n, v_pos_eye);
   if (objectSkipped(g.object)) discard;
   out_id = g.object + 1u;
 }
@@ -182,9 +184,15 @@ layout(location = 1) out uint out_id;
 const float kNoHit = 3.0e38;
 const float kTwoPi = 6.28318530718;
 
-// Keeps the nearest hit at or beyond s_min.
+// The ray's eye-relative point at canonical distance s (set by main before any hit test).
+vec3 ray_pos_eye;
+float ray_len;
+vec3 hitEye(float s) { return (1.0 + s / ray_len) * ray_pos_eye; }
+
+// Keeps the nearest hit at or beyond s_min that no section plane removes (behind a removed hit
+// the ray goes on to the surface's far side: the inside of the cut solid).
 void keep(float s, float s_min, vec3 n, inout float best, inout vec3 best_n) {
-  if (s >= s_min && s < best) { best = s; best_n = n; }
+  if (s >= s_min && s < best && !sectionClipped(hitEye(s))) { best = s; best_n = n; }
 }
 
 // Cylinder (rb == rt) or cone/frustum about +Z from z = 0 (radius rb) to z = h (radius rt); the
@@ -255,7 +263,7 @@ void hitTorus(vec3 o, vec3 d, float major_r, float minor_r, float sweep, float s
     vec3 p = o + s * d;
     float dist = abs(torusDistance(p, major_r, minor_r));
     if (dist < eps) {
-      if (inSweep(p, sweep)) {
+      if (inSweep(p, sweep) && !sectionClipped(hitEye(s))) {
         // The march stops up to eps short of the surface; Newton steps on the signed distance
         // along the ray land on it, so depth is exact, not eps too near.
         for (int k = 0; k < 3; ++k) {
@@ -282,6 +290,8 @@ void main() {
   vec3 dv = v_local - v_eye_local;
   float len_d = length(dv);
   vec3 d = dv / len_d;
+  ray_pos_eye = v_pos_eye;
+  ray_len = len_d;
   float view_depth = max(dot(v_pos_eye, view_forward_near.xyz), 1e-30);
   float s_min = (view_forward_near.w / view_depth - 1.0) * len_d;  // the near plane
   float px = v_px_scale * view_depth;  // canonical units per pixel around the proxy point
@@ -314,7 +324,10 @@ void main() {
 #ifdef TW_EYE_OUTSIDE
   gl_FragDepth = min(gl_FragDepth, gl_FragCoord.z);  // keep the depth_less promise to the rounding
 #endif
-  out_color = shadeSurface(objectBaseColor(g.object), normalize(v_normal_matrix * n), hit_eye);
+  vec3 n_eye = normalize(v_normal_matrix * n);
+  out_color = sectionCap(dot(n_eye, hit_eye) > 0.0)
+                  ? kSectionCap
+                  : shadeSurface(objectBaseColor(g.object), n_eye, hit_eye);
   if (objectSkipped(g.object)) discard;
   out_id = g.object + 1u;
 }
@@ -386,12 +399,15 @@ void main() {
   // side (the inside of an open tube) but not to the eye: on a coarse ring it leans away from
   // the eye near a silhouette, and flipping it there would shade a pixel of the lit side as if
   // it were the far side, a dark speck inside the pipe.
+  if (sectionClipped(pos_eye)) discard;
   vec3 facet = facetNormal(pos_eye);
   if (dot(facet, pos_eye) > 0.0) facet = -facet;
   float len = length(v_normal);
   vec3 n = facet;
   if (len > 0.25) n = dot(v_normal, facet) < 0.0 ? -v_normal / len : v_normal / len;
-  out_color = shadeSeenSide(v_base, n, pos_eye);
+  // The surface's own normal facing away: the inside of a solid the section cut open.
+  out_color = sectionCap(len > 0.25 && dot(v_normal, pos_eye) > 0.0)
+                  ? kSectionCap : shadeSeenSide(v_base, n, pos_eye);
   if (objectSkipped(v_object)) discard;
   out_id = v_object + 1u;
 }
@@ -415,7 +431,7 @@ void main() {
   v_color = shadeSeenSide(objectBaseColor(object), normalize(-position), position);
   gl_Position = view_projection * vec4(position, 1.0);
   // A point of an object this pass skips goes outside the clip volume: nothing of it is drawn.
-  if (objectSkipped(object)) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
+  if (objectSkipped(object) || sectionClipped(position)) gl_Position = vec4(2.0, 2.0, 2.0, 1.0);
 }
 )";
 }
@@ -467,10 +483,13 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
+  if (sectionClipped(pos_eye)) discard;
   uint object = v_object + min(uint(max(v_along, 0.0)), v_last);
   vec3 facet = facetNormal(pos_eye);
   if (dot(facet, pos_eye) > 0.0) facet = -facet;
-  out_color = shadeSeenSide(objectBaseColor(object), facet, pos_eye);
+  // Row boxes are wound outward like every box: a back face is the inside of a cut one.
+  out_color = sectionCap(!gl_FrontFacing) ? kSectionCap
+                                          : shadeSeenSide(objectBaseColor(object), facet, pos_eye);
   if (objectSkipped(object)) discard;
   out_id = object + 1u;
 }
@@ -530,6 +549,7 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out uint out_id;
 )") + shadingGlsl() + R"(
 void main() {
+  if (sectionClipped(pos_eye)) discard;
   // As parametricSmoothFragmentShader with a face's normal: turned to the side seen.
   vec3 facet = facetNormal(pos_eye);
   if (dot(facet, pos_eye) > 0.0) facet = -facet;
