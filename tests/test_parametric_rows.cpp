@@ -6,8 +6,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <span>
 
 #include "parametric_render_support.h"
+#include "section_planes.h"
 
 namespace tw {
 namespace {
@@ -108,6 +110,54 @@ TEST_F(ParametricRendering, RowsOfBoxesDrawTheFrameTheirBoxesDraw) {
     }
   EXPECT_GT(shown_boxes, 3u);
   EXPECT_GT(shown_rows, 0u);
+}
+
+// Tall boxes along a line cut open by a section (section_planes.h), drawn as a row and one by
+// one: the cut boxes show their insides in the section colour, and the same boxes placed
+// mirrored (their frames reflected, the same solids) draw the very same frame; their triangles
+// are turned so that their back faces are the insides.
+TEST_F(ParametricRendering, BoxesCutByASectionShowTheirInsidesMirroredOrNot) {
+  auto lineOfBoxes = [](bool mirrored) {
+    std::vector<Part> parts;
+    for (int x = 0; x < 4; ++x) {
+      Transform t = placed({4.0 + 8.0 * x, 0.0, 1.5});
+      if (mirrored) t.linear = glm::mat3(glm::vec3(-1, 0, 0), glm::vec3(0, 1, 0), glm::vec3(0, 0, 1));
+      parts.push_back({uint32_t(1 + x), Box{glm::vec3(4.0f, 2.0f, 1.5f)}, t,
+                       0xff000000u | (0x1f2b3du * uint32_t(1 + x))});
+    }
+    return parts;
+  };
+  const Camera camera = lookingAt({-6.0, -14.0, 10.0}, {16.0, 0.0, 1.5});
+  const SectionPlane cut{{16.0, 0.0, 0.0}, {0.0, -1.0, 0.0}};  // the half toward the eye goes
+  auto renderCut = [&](const char* name, bool mirrored, bool rows) {
+    const fs::path package = buildPackage(name, lineOfBoxes(mirrored), false, {}, 8);
+    Walkthrough* walk = nullptr;
+    const Frame whole = render(package, camera, ParametricMode::Tessellated, OcclusionMode::Off,
+                               &walk, false, 0.25, 0.0, 32, 8192, true, rows);
+    EXPECT_GT(whole.stats.parametric_triangles, 0u);
+    walk->setSections(std::span<const SectionPlane>(&cut, 1));
+    walk->renderFrame(camera, 0.0);
+    Frame frame;
+    walk->renderer().readObjectIds(frame.ids);
+    walk->renderer().readColor(frame.rgba);
+    return frame;
+  };
+  for (bool rows : {true, false}) {
+    SCOPED_TRACE(rows ? "as a row" : "one by one");
+    const Frame plain = renderCut("boxes_cut", false, rows);
+    const Frame mirrored = renderCut("boxes_cut_mirrored", true, rows);
+    uint64_t caps = 0, shown = 0, differ = 0;
+    for (size_t p = 0; p < plain.ids.size(); ++p) {
+      const uint8_t* c = &plain.rgba[4 * p];
+      shown += plain.ids[p] != 0u;
+      caps += plain.ids[p] != 0u && c[0] == 199 && c[1] == 56 && c[2] == 46;
+      differ += plain.ids[p] != mirrored.ids[p] || !std::equal(c, c + 4, &mirrored.rgba[4 * p]);
+    }
+    EXPECT_GT(shown, 1000u);
+    EXPECT_GT(caps, 200u) << "the insides of the cut boxes, in the section colour";
+    EXPECT_LT(caps, shown) << "their outsides shaded";
+    EXPECT_LE(differ * 500, shown) << differ << " of " << shown << " pixels differ when mirrored";
+  }
 }
 
 // A frame line: four I-beams of 8 m end to end along X (objects 1 to 4, colours of their own).

@@ -136,14 +136,18 @@ void appendSurface(InstanceBatch& batch, const pkg::InstanceRecord& in,
   const uint32_t covered = f.shape == Shape::Box ? uint32_t(b.covered_faces | f.thin_faces) : 0u;
   auto face_covered = [&](uint32_t k) { return ((covered >> (k / 6)) & 1u) != 0; };
   if (f.batch == kTwoSided || f.batch == kPoints) {
-    if (covered) {
-      for (uint32_t k = 0; k + 2 < count; k += 3)
-        if (!face_covered(k))
-          out.insert(out.end(), {base + unit_indices[k], base + unit_indices[k + 1],
-                                 base + unit_indices[k + 2]});
+    // Two-sided triangles go out wound counter-clockwise seen from outside, a mirrored
+    // instance's turned, so a shader can tell the inside of a solid that a section cut open by
+    // gl_FrontFacing where the vertices carry no normal (a box's flat faces).
+    const bool turn = f.batch == kTwoSided && (b.flags & kMirrored) != 0;
+    if (!covered && !turn) {
+      for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit_indices[k]);
       return;
     }
-    for (uint32_t k = 0; k < count; ++k) out.push_back(base + unit_indices[k]);
+    for (uint32_t k = 0; k + 2 < count; k += 3)
+      if (!covered || !face_covered(k))
+        out.insert(out.end(), {base + unit_indices[k], base + unit_indices[turn ? k + 2 : k + 1],
+                               base + unit_indices[turn ? k + 1 : k + 2]});
     return;
   }
   // A closed surface seen from outside: its back faces are left out here, where the eye-relative
@@ -180,17 +184,20 @@ void appendBoxRow(InstanceBatch& batch, const pkg::InstanceRecord& row, const In
   }
   const uint32_t left_out = b.covered_faces | f.thin_faces;
   const bool cull = f.batch == kCullCcw || f.batch == kCullCw;
-  const float front = f.batch == kCullCw ? -1.0f : 1.0f;
+  // Triangles go out wound counter-clockwise seen from outside, mirrored rows too, so the row
+  // shader's gl_FrontFacing tells the inside of a box a section cut open.
+  const bool mirrored = (b.flags & kMirrored) != 0;
   std::vector<uint32_t>& out = batch.indices[kRows];
   const uint32_t* unit_indices = unit.indices.data() + mesh.first_index;
   for (uint32_t k = 0; k + 2 < mesh.side_indices; k += 3) {
     if ((left_out >> (k / 6)) & 1u) continue;  // two triangles a face, in the bits' order
-    const glm::vec3& a = vertices[base + unit_indices[k]].position;
-    const glm::vec3& b1 = vertices[base + unit_indices[k + 1]].position;
-    const glm::vec3& c1 = vertices[base + unit_indices[k + 2]].position;
-    if (cull && front * glm::dot(glm::cross(b1 - a, c1 - a), a) > 0.0f) continue;  // eye behind it
-    out.insert(out.end(),
-               {base + unit_indices[k], base + unit_indices[k + 1], base + unit_indices[k + 2]});
+    const uint32_t ia = base + unit_indices[k];
+    const uint32_t ib = base + unit_indices[mirrored ? k + 2 : k + 1];
+    const uint32_t ic = base + unit_indices[mirrored ? k + 1 : k + 2];
+    const glm::vec3& a = vertices[ia].position;
+    if (cull && glm::dot(glm::cross(vertices[ib].position - a, vertices[ic].position - a), a) > 0.0f)
+      continue;  // the eye behind it
+    out.insert(out.end(), {ia, ib, ic});
   }
 }
 

@@ -405,9 +405,10 @@ void main() {
   float len = length(v_normal);
   vec3 n = facet;
   if (len > 0.25) n = dot(v_normal, facet) < 0.0 ? -v_normal / len : v_normal / len;
-  // The surface's own normal facing away: the inside of a solid the section cut open.
-  out_color = sectionCap(len > 0.25 && dot(v_normal, pos_eye) > 0.0)
-                  ? kSectionCap : shadeSeenSide(v_base, n, pos_eye);
+  // The surface's own normal facing away (or, for flat faces that carry none, the triangle's
+  // back: instances are wound outward): the inside of a solid the section cut open.
+  bool back = len > 0.25 ? dot(v_normal, pos_eye) > 0.0 : !gl_FrontFacing;
+  out_color = sectionCap(back) ? kSectionCap : shadeSeenSide(v_base, n, pos_eye);
   if (objectSkipped(v_object)) discard;
   out_id = v_object + 1u;
 }
