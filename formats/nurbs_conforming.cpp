@@ -693,7 +693,8 @@ void tessellateNurbsConforming(const NurbsPatchSet& set, float chordal_tolerance
 bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideString, 4>& sides,
                            float chordal_tolerance, bool flip, TriangleMesh& out,
                            ConformingTessellationStats* stats_out) {
-  if (!validateNurbsPatch(patch).empty()) return false;
+  uint32_t n = 2, m = 2;
+  if (!planPatchGrid(patch, chordal_tolerance, n, m)) return false;
   for (const PatchSideString& side : sides) {
     if (side.vertices.empty() || side.vertices.size() != side.t.size()) return false;
     for (uint32_t v : side.vertices)
@@ -702,10 +703,6 @@ bool tessellatePatchInside(const NurbsPatch& patch, const std::array<PatchSideSt
   for (int s = 0; s < 4; ++s)  // each side ends where the next begins
     if (sides[s].vertices.back() != sides[(s + 1) % 4].vertices.front()) return false;
   const PatchEval e{&patch, nurbsDomain(patch)};
-  const double tolerance =
-      std::isfinite(chordal_tolerance) && chordal_tolerance > 0.0f ? chordal_tolerance : INFINITY;
-  uint32_t n = 2, m = 2;
-  planGrid(sampleCurvature(e), tolerance, n, m);
   ConformingTessellationStats stats;
   stats.patches = 1;
   Emitter emit(out, stats);

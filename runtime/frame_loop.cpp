@@ -124,9 +124,8 @@ void Walkthrough::setSections(std::span<const SectionPlane> world_planes) {
   if (world_planes.size() > kMaxSectionPlanes)
     throw std::invalid_argument(std::to_string(world_planes.size()) + " section planes, at most " +
                                 std::to_string(kMaxSectionPlanes));
-  world_sections_.assign(world_planes.begin(), world_planes.end());
-  package_sections_ = world_sections_;
-  for (SectionPlane& plane : package_sections_) plane.point -= view_->origin();
+  sections_.assign(world_planes.begin(), world_planes.end());
+  for (SectionPlane& plane : sections_) plane.point -= view_->origin();
 }
 
 void Walkthrough::setOcclusion(OcclusionMode mode) {
@@ -238,7 +237,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   rememberView(camera, eye, aspect, time_s, parametric_list);
 
   renderer_->beginFrame(last_rotation_, last_projection_);
-  renderer_->setSections(package_sections_, eye);
+  renderer_->setSections(sections_, eye);
   // Draw items in double: offset of each cluster's grid origin from the eye.
   items_.clear();
   const OcclusionMode mode = options_.reference ? OcclusionMode::Off : options_.occlusion;

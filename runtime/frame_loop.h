@@ -114,7 +114,6 @@ class Walkthrough {
   // Section planes in world coordinates (section_planes.h; at most kMaxSectionPlanes: six
   // planes and a box), applied from the next frame on to every draw path; empty: none.
   void setSections(std::span<const SectionPlane> world_planes);
-  const std::vector<SectionPlane>& sections() const { return world_sections_; }
   // World bounds of the model (double), for cameras and paths.
   glm::dvec3 worldMin() const;
   glm::dvec3 worldMax() const;
@@ -168,7 +167,7 @@ class Walkthrough {
   std::vector<uint32_t> hzb_cut_, mesh_pass_, parametric_pass_;
   ParametricView last_parametric_view_;
   ObjectStates object_states_;
-  std::vector<SectionPlane> world_sections_, package_sections_;  // the same planes in both frames
+  std::vector<SectionPlane> sections_;  // setSections's planes, in the package frame
   std::vector<uint32_t> shown_clusters_, shown_parametric_;  // the cut's clusters drawn opaque
   std::vector<uint32_t> ghost_mesh_, ghost_parametric_;     // and those drawn ghosted
   std::vector<DrawItem> ghost_items_;

@@ -167,7 +167,7 @@ PartMesh meshPart(const TopoDS_Shape& shape, double fixed_deflection, bool confo
   if (conforming_bspline)
     meshShapeFaces(shape, deflection, kAngularDeflectionRad, planned_faces);
   else
-    BRepMesh_IncrementalMesh(shape, deflection, false, kAngularDeflectionRad, false);
+    BRepMesh_IncrementalMesh opencascade_only(shape, deflection, false, kAngularDeflectionRad, false);
 
   // Nodes shared along edges are exact copies, so a weld by exact position joins the faces.
   FaceWeld weld(part.mesh, part.center);
