@@ -1,9 +1,8 @@
 // Out-of-core bricking: survey pass, binning pass with bounded write buffers, streaming splits of
-// over-full bricks, and the readers for the spill files it leaves behind.
+// over-full bricks, and the readers of what it spilled (the files themselves: spill_file.h).
 #include "scene_bricking.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -12,44 +11,27 @@
 #include <stdexcept>
 #include <unordered_map>
 
-#define XXH_INLINE_ALL
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <xxhash.h>
 
 #include "byte_packing.h"
 #include "closed_surface.h"
 #include "consistent_winding.h"
 #include "repeated_triangles.h"
-#include "file_reader.h"
 #include "format_error.h"
 #include "nurbs_conforming.h"
 #include "position_key.h"
 #include "scene_io.h"
 #include "scene_stats.h"
+#include "spill_file.h"
 
 namespace tw {
 namespace {
 
-// --- Spill files: header, content, trailer written last (a missing trailer = killed run) ---
-
-constexpr uint32_t kSpillMagic = 0x50535754u;    // "TWSP"
-constexpr uint32_t kTrailerMagic = 0x45535754u;  // "TWSE"
-constexpr uint32_t kSpillVersion = 2;  // 2: ObjectBounds records carry the surface kind
-enum class SpillKind : uint32_t { Brick = 1, Objects = 2, ObjectBounds = 3, Parametrics = 4 };
-// An ObjectBounds record: min and max (vec3 each) and the surface kind (uint32): what the
-// object's mesh pieces make (closed_surface.h); none for objects without mesh geometry.
+// An ObjectBounds record (spill_file.h): min and max (vec3 each) and the surface kind (uint32):
+// what the object's mesh pieces make (closed_surface.h); none for objects without mesh geometry.
 constexpr uint64_t kObjectBoundsRecordBytes = 28;
 constexpr uint32_t kNoSurface = 0, kClosedSurface = 1, kOpenSurface = 2;
-
-struct SpillHeader {
-  uint32_t magic, version, kind, reserved;
-};
-struct SpillTrailer {
-  uint32_t magic, reserved;
-  uint64_t record_count, content_bytes, checksum;  // XXH3-64 of the content
-};
-static_assert(sizeof(SpillHeader) == 16 && sizeof(SpillTrailer) == 32);
 
 // One triangle in a brick file: positions relative to the package origin, dense object index.
 struct TriangleRecord {
@@ -57,118 +39,6 @@ struct TriangleRecord {
   uint32_t object;
 };
 static_assert(sizeof(TriangleRecord) == 40);
-
-[[noreturn]] void ioFail(const std::filesystem::path& path, const char* what) {
-  throw std::runtime_error(path.string() + ": " + what + ": " + std::strerror(errno));
-}
-
-// Appends records through a caller-sized buffer; the file is opened only to flush, so thousands
-// of bricks never hold thousands of descriptors.
-class SpillWriter {
- public:
-  SpillWriter(std::filesystem::path path, SpillKind kind) : path_(std::move(path)) {
-    XXH3_64bits_reset(&hash_);
-    std::FILE* f = std::fopen(path_.string().c_str(), "wb");
-    if (!f) ioFail(path_, "cannot create");
-    SpillHeader header{kSpillMagic, kSpillVersion, static_cast<uint32_t>(kind), 0};
-    bool ok = std::fwrite(&header, sizeof header, 1, f) == 1;
-    if (std::fclose(f) != 0 || !ok) ioFail(path_, "cannot write");
-    bytes_written_ = sizeof header;
-  }
-  void append(const void* data, size_t bytes) {
-    const auto* p = static_cast<const uint8_t*>(data);
-    buffer_.insert(buffer_.end(), p, p + bytes);
-    XXH3_64bits_update(&hash_, data, bytes);
-    content_bytes_ += bytes;
-  }
-  void countRecord() { ++records_; }
-  void reserve(size_t bytes) { buffer_.reserve(bytes); }
-  size_t buffered() const { return buffer_.size(); }
-  void flush(bool release) {
-    if (!buffer_.empty()) {
-      std::FILE* f = std::fopen(path_.string().c_str(), "ab");
-      if (!f) ioFail(path_, "cannot open");
-      bool ok = std::fwrite(buffer_.data(), 1, buffer_.size(), f) == buffer_.size();
-      if (std::fclose(f) != 0 || !ok) ioFail(path_, "cannot write");
-      bytes_written_ += buffer_.size();
-      buffer_.clear();
-    }
-    if (release) buffer_.shrink_to_fit();
-  }
-  // Flushes and appends the trailer; the file is complete only after this.
-  void finish() {
-    SpillTrailer trailer{kTrailerMagic, 0, records_, content_bytes_, XXH3_64bits_digest(&hash_)};
-    append(&trailer, sizeof trailer);
-    content_bytes_ -= sizeof trailer;
-    flush(true);
-  }
-  uint64_t records() const { return records_; }
-  uint64_t bytesWritten() const { return bytes_written_; }
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-  std::vector<uint8_t> buffer_;
-  XXH3_state_t hash_;
-  uint64_t records_ = 0, content_bytes_ = 0, bytes_written_ = 0;
-};
-
-// Bounds-checked reading of a spill file's content; finish() verifies the checksum.
-class SpillReader {
- public:
-  SpillReader(const std::filesystem::path& path, SpillKind kind) : reader_(path) {
-    if (reader_.size() < sizeof(SpillHeader) + sizeof(SpillTrailer))
-      reader_.fail("spill file too short (" + std::to_string(reader_.size()) + " bytes)");
-    auto header = reader_.readValue<SpillHeader>();
-    if (header.magic != kSpillMagic) reader_.failAt(0, "not a spill file (bad magic)");
-    if (header.version != kSpillVersion)
-      reader_.failAt(4, "unsupported spill version " + std::to_string(header.version));
-    if (header.kind != static_cast<uint32_t>(kind))
-      reader_.failAt(8, "spill file of kind " + std::to_string(header.kind) + ", expected " +
-                            std::to_string(static_cast<uint32_t>(kind)));
-    if (header.reserved != 0) reader_.failAt(12, "reserved header field is not zero");
-    const uint64_t trailer_at = reader_.size() - sizeof(SpillTrailer);
-    reader_.seek(trailer_at);
-    trailer_ = reader_.readValue<SpillTrailer>();
-    if (trailer_.magic != kTrailerMagic)
-      reader_.failAt(trailer_at, "missing trailer (truncated or unfinished spill file)");
-    if (trailer_.reserved != 0) reader_.failAt(trailer_at + 4, "reserved trailer field is not zero");
-    if (trailer_.content_bytes != trailer_at - sizeof(SpillHeader))
-      reader_.failAt(trailer_at, "trailer says " + std::to_string(trailer_.content_bytes) +
-                                     " content bytes, file holds " +
-                                     std::to_string(trailer_at - sizeof(SpillHeader)));
-    reader_.seek(sizeof(SpillHeader));
-    XXH3_64bits_reset(&hash_);
-  }
-  uint64_t records() const { return trailer_.record_count; }
-  uint64_t contentRemaining() const {
-    return reader_.size() - sizeof(SpillTrailer) - reader_.offset();
-  }
-  void read(void* out, size_t bytes) {
-    if (bytes > contentRemaining()) reader_.fail("record runs past the end of the content");
-    reader_.read(out, bytes);
-    XXH3_64bits_update(&hash_, out, bytes);
-  }
-  template <typename T>
-  T readValue() {
-    T value;
-    read(&value, sizeof value);
-    return value;
-  }
-  void finish() {
-    if (contentRemaining() != 0) reader_.fail("unexpected bytes after the last record");
-    if (XXH3_64bits_digest(&hash_) != trailer_.checksum)
-      reader_.failAt(sizeof(SpillHeader), "checksum mismatch (damaged spill file)");
-  }
-  [[noreturn]] void fail(const std::string& reason) const { reader_.fail(reason); }
-  const std::string& name() const { return reader_.name(); }
-  uint64_t offset() const { return reader_.offset(); }
-
- private:
-  FileReader reader_;
-  SpillTrailer trailer_{};
-  XXH3_state_t hash_;
-};
 
 void putPrimitive(ByteWriter& w, const Primitive& primitive) {
   w.put(static_cast<uint8_t>(primitive.index()));
