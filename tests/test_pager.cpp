@@ -490,6 +490,34 @@ TEST(Pager, GpuBudgetEvictsOnlyStalePagesAndKeepsPinnedOnes) {
   for (uint32_t start = 0; start + window < page_count - 2; start += window) {
     std::vector<uint32_t> wanted;
     for (uint32_t p = start; p < start + window; ++p) wanted.push_back(p);
+    // First stay on one frame while the window loads: the previous window was touched a frame
+    // ago, so nothing may be evicted for it yet, and pages that do not fit must wait. Staying
+    // put (rather than running frames on the clock) makes that wait happen however slowly the
+    // loaders run, as they do under a sanitizer.
+    if (start > 0) {
+      pager.beginFrame(frame);
+      const auto stall = Clock::now();
+      uint64_t waited_here = 0;
+      while (waited_here == 0 && msSince(stall) < 5000) {
+        bool all = true;
+        for (uint32_t p : wanted) {
+          if (pager.resident(p)) {
+            pager.touch(p);
+            last_touch[p] = frame;
+          } else {
+            all = false;
+            pager.request(p, 1.0f);
+          }
+        }
+        if (all) break;
+        pager.takeUploads();
+        waited_here = pager.stats().pages_waiting_for_pool;
+        std::this_thread::sleep_for(1ms);
+      }
+      waited += waited_here;
+      evicted += pager.stats().pages_evicted;
+      ++frame;
+    }
     // Hold the view until the window is resident and a few frames more.
     uint64_t settled = 0;
     const auto t0 = Clock::now();
