@@ -215,6 +215,21 @@ void writePngRgba(const std::filesystem::path& path, int width, int height,
     throw std::runtime_error(path.string() + ": cannot write PNG");
 }
 
+std::vector<uint8_t> encodePngRgba(int width, int height, std::span<const uint8_t> rgba) {
+  if (width <= 0 || height <= 0 || rgba.size() != size_t(width) * size_t(height) * 4)
+    throw std::invalid_argument("encodePngRgba: " + std::to_string(rgba.size()) + " bytes for a " +
+                                std::to_string(width) + "x" + std::to_string(height) + " image");
+  std::vector<uint8_t> png;
+  const auto append = [](void* context, void* data, int size) {
+    auto* out = static_cast<std::vector<uint8_t>*>(context);
+    const auto* bytes = static_cast<const uint8_t*>(data);
+    out->insert(out->end(), bytes, bytes + size);
+  };
+  if (!stbi_write_png_to_func(append, &png, width, height, 4, rgba.data(), width * 4))
+    throw std::runtime_error("cannot encode a PNG");
+  return png;
+}
+
 IdCensus censusOf(std::span<const uint32_t> ids) {
   std::vector<uint32_t> shown;
   shown.reserve(ids.size());

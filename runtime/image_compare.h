@@ -83,6 +83,9 @@ RgbaImage readPngRgba(const std::filesystem::path& path);
 void writePngRgba(const std::filesystem::path& path, int width, int height,
                   std::span<const uint8_t> rgba);
 
+// The same PNG, in memory (a BCF snapshot). Throws as writePngRgba.
+std::vector<uint8_t> encodePngRgba(int width, int height, std::span<const uint8_t> rgba);
+
 // Object-id images store each pixel's uint32 (object index + 1, 0 = background) little-endian in
 // the R, G, B, A bytes of an RGBA8 image. idsFromRgba takes rgba.size()/4 pixels (rgba.size() must
 // be a multiple of 4, else std::invalid_argument).

@@ -32,5 +32,6 @@ void registerBenchCommand(CLI::App& app, const GlobalOptions& global);
 void registerPickCommand(CLI::App& app, const GlobalOptions& global);
 void registerFindCommand(CLI::App& app, const GlobalOptions& global);
 void registerMeasureCommand(CLI::App& app, const GlobalOptions& global);
+void registerBcfCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   tw::registerPickCommand(app, global);
   tw::registerMeasureCommand(app, global);
   tw::registerFindCommand(app, global);
+  tw::registerBcfCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

@@ -26,6 +26,8 @@
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_queries.h"
+#include "bcf_viewpoint_option.h"
+#include "review_state_options.h"
 #include "section_planes.h"
 #include "snapshot_camera.h"
 #include "soak_log.h"
@@ -72,14 +74,9 @@ struct RenderArgs {
   std::string hzb_build = "auto";
   int hzb_span = BoxTest{}.max_span_texels;
   int hzb_split = BoxTest{}.split_px;
-  // Per-object state along the whole path (object_states.h).
-  std::vector<std::string> hide_layers;
-  std::vector<std::string> sections;     // X,Y,Z,NX,NY,NZ each
-  std::vector<std::string> section_box;  // MIN MAX, x,y,z each
-  std::vector<std::string> isolate_layers;
-  std::string isolate_keys;  // FILE or KEY,KEY,...
-  std::string select_keys;
-  bool xray_others = false;
+  // Per-object state and sections along the whole path (object_states.h, section_planes.h).
+  ReviewStateArgs state;
+  std::string viewpoint;  // FILE.bcfzip[#N]
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -106,6 +103,13 @@ constexpr double kMaxWalkSteps = 1000.0;
 constexpr double kMaxTauPx = 1e4;
 constexpr int kMaxGeneratedFrames = 10'000'000;  // a generated path's keys: under 1 GB
 
+// How many of the path options are given.
+int pathSources(const RenderArgs& args) {
+  return int(!args.path_file.empty()) + int(args.orbit_frames > 0) +
+         int(args.flythrough_frames > 0) + int(args.random_walk_frames > 0);
+}
+bool hasPathSource(const RenderArgs& args) { return pathSources(args) > 0; }
+
 void validateArgs(const RenderArgs& args) {
   auto number = [](double v) {
     char text[32];
@@ -126,11 +130,10 @@ void validateArgs(const RenderArgs& args) {
   if (!(args.target_fps >= 0.0 && args.target_fps <= kMaxFps))
     throw std::runtime_error("--target-fps " + number(args.target_fps) + ": must be 0 (off) to " +
                              number(kMaxFps));
-  const int path_sources = int(!args.path_file.empty()) + int(args.orbit_frames > 0) +
-                           int(args.flythrough_frames > 0) + int(args.random_walk_frames > 0);
-  if (path_sources != 1)
+  if (pathSources(args) > 1 || (pathSources(args) == 0 && args.viewpoint.empty()))
     throw std::runtime_error(
-        "give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES, --random-walk FRAMES");
+        "give exactly one of --path FILE, --orbit FRAMES, --flythrough FRAMES, --random-walk FRAMES "
+        "(or --viewpoint alone for a still from its camera)");
   if (std::max({args.orbit_frames, args.flythrough_frames, args.random_walk_frames}) >
       kMaxGeneratedFrames)
     throw std::runtime_error("a generated path has at most " + std::to_string(kMaxGeneratedFrames) +
@@ -143,9 +146,7 @@ void validateArgs(const RenderArgs& args) {
     throw std::runtime_error(
         "--soak-interval takes a positive number of seconds and --out DIR, without --png or "
         "--check-occlusion");
-  if (args.xray_others && args.isolate_layers.empty() && args.isolate_keys.empty() &&
-      args.select_keys.empty())
-    throw std::runtime_error("--xray-others needs --isolate-layer, --isolate-keys or --select");
+  validateReviewStateArgs(args.state);
 }
 
 WalkthroughOptions walkthroughOptions(const RenderArgs& args, int width, int height) {
@@ -286,6 +287,12 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
   const double diagonal = glm::length(bounds.max - bounds.min);
   base.near_m = 0.05;
   base.far_m = std::max(100.0, 10.0 * diagonal);
+  // A path of one key is a still (a BCF viewpoint): its frame is rendered until the cut settles,
+  // with a far plane that reaches the model from wherever the camera stands.
+  const bool still = path.keys.size() == 1;
+  if (still)
+    base.far_m = std::max(base.far_m, 2.0 * (glm::length(path.keys.front().camera.position -
+                                                         0.5 * (bounds.min + bounds.max)) + diagonal));
   int frames = static_cast<int>(std::floor(path.durationS() * args.fps + 1e-9)) + 1;
   if (args.max_frames > 0) frames = std::min(frames, args.max_frames);
   RenderedPath rendered;
@@ -312,7 +319,8 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
       walk.renderFrame(path.sample(walk_t, base), walk_t);
       ++rendered.walk_frames;
     }
-    FrameStats stats = walk.renderFrame(path.sample(t, base), t);
+    FrameStats stats = still ? walk.renderSettled(path.sample(t, base))
+                             : walk.renderFrame(path.sample(t, base), t);
     stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
     reportLoadErrors(walk, rendered);
     if (i == 0) rendered.first_frame_ms = msSince(open_start);
@@ -433,48 +441,6 @@ void writeRenderOutputs(const std::filesystem::path& out_dir, const RenderedPath
   std::fclose(f);
 }
 
-// --hide-layer, --isolate-layer, --isolate-keys, --xray-others and --select as object states:
-// isolating hides every object but those named (layers and keys together), or X-rays them with
-// --xray-others (which, with a selection alone, X-rays all but the selection); hiding then hides
-// the layers named.
-void applyObjectStates(const RenderArgs& args, Walkthrough& walk) {
-  const PackageView& view = walk.package();
-  ObjectStates& states = walk.objectStates();
-  const uint32_t others = args.xray_others ? kObjectXray : kObjectHidden;
-  if (!args.isolate_layers.empty() || !args.isolate_keys.empty()) {
-    states.setAll(others, true);
-    for (const std::string& name : args.isolate_layers)
-      for (uint32_t o : objectsOfLayer(view, layerIndex(view, name))) states.set(o, others, false);
-    if (!args.isolate_keys.empty())
-      for (uint32_t o : objectsWithKeys(view, parseKeyList(args.isolate_keys)))
-        states.set(o, others, false);
-  } else if (args.xray_others) {
-    states.setAll(kObjectXray, true);  // selected objects stay opaque (object_states.h)
-  }
-  for (const std::string& name : args.hide_layers)
-    for (uint32_t o : objectsOfLayer(view, layerIndex(view, name))) states.set(o, kObjectHidden, true);
-  if (!args.select_keys.empty())
-    for (uint32_t o : objectsWithKeys(view, parseKeyList(args.select_keys)))
-      states.set(o, kObjectSelected, true);
-}
-
-// --section (each a plane) and --section-box (six planes facing out of the box), world metres.
-std::vector<SectionPlane> sectionPlanes(const RenderArgs& args) {
-  if (args.sections.size() > kMaxUserSectionPlanes)
-    throw std::invalid_argument("--section: " + std::to_string(args.sections.size()) +
-                                " planes, at most " + std::to_string(kMaxUserSectionPlanes));
-  std::vector<SectionPlane> planes;
-  for (const std::string& text : args.sections) planes.push_back(parseSectionPlane(text));
-  if (!args.section_box.empty()) {
-    const glm::dvec3 lo = parseVec3(args.section_box[0]), hi = parseVec3(args.section_box[1]);
-    if (glm::any(glm::greaterThan(lo, hi)))
-      throw std::invalid_argument("--section-box: MIN " + args.section_box[0] +
-                                  " is not below MAX " + args.section_box[1] + " on every axis");
-    for (const SectionPlane& plane : sectionBoxPlanes(lo, hi)) planes.push_back(plane);
-  }
-  return planes;
-}
-
 // Steps: the GL context, the walkthrough over the package, the path rendered frame by frame,
 // the summary printed and, with --out, written beside the frames' statistics.
 void runRender(const RenderArgs& args, const GlobalOptions& global) {
@@ -491,13 +457,29 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   const auto open_start = Clock::now();
   Walkthrough walk(args.file, options);
   times.open_ms = msSince(open_start);
-  applyObjectStates(args, walk);
-  walk.setSections(sectionPlanes(args));
+  // A BCF viewpoint first (it resets the objects' states), then the options on top of it.
+  std::optional<ViewpointApplied> viewpoint;
+  if (!args.viewpoint.empty())
+    viewpoint = applyViewpointOption(args.viewpoint, walk.package(), walk.objectStates(), Camera{});
+  applyReviewState(args.state, walk.package(), walk.objectStates());
+  std::vector<SectionPlane> sections = reviewSectionPlanes(args.state);
+  if (viewpoint) sections.insert(sections.end(), viewpoint->sections.begin(), viewpoint->sections.end());
+  if (sections.size() > kMaxSectionPlanes)
+    throw std::invalid_argument(std::to_string(sections.size()) + " section planes, at most " +
+                                std::to_string(kMaxSectionPlanes));
+  walk.setSections(sections);
 
   Aabb bounds;
   bounds.add(walk.worldMin());
   bounds.add(walk.worldMax());
-  const CameraPath path = cameraPath(args, bounds);
+  CameraPath path;
+  if (viewpoint && !hasPathSource(args)) {
+    if (!viewpoint->has_camera)
+      throw std::runtime_error(args.viewpoint + ": the viewpoint has no camera; give a path");
+    path.keys.push_back({0.0, viewpoint->camera});  // a still, rendered settled
+  } else {
+    path = cameraPath(args, bounds);
+  }
   OcclusionLossCheck occlusion_check;
   const RenderedPath rendered =
       renderPath(args, global, walk, path, bounds, open_start, occlusion_check);
@@ -606,26 +588,11 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
       ->capture_default_str();
   cmd->add_flag("--hzb-final-rebuild,!--no-hzb-final-rebuild", args->hzb_final_rebuild,
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
-  cmd->add_option("--hide-layer", args->hide_layers, "Hide the objects of this layer (repeatable)")
-      ->allow_extra_args(false);
-  cmd->add_option("--isolate-layer", args->isolate_layers,
-                  "Show only the objects of this layer (repeatable; with --isolate-keys, both)")
-      ->allow_extra_args(false);
-  cmd->add_option("--isolate-keys", args->isolate_keys,
-                  "Show only the objects with these database keys: FILE (one a line) or K1,K2,...");
-  cmd->add_option("--select", args->select_keys,
-                  "Select (tint and outline) the objects with these database keys: FILE or "
-                  "K1,K2,...");
-  cmd->add_option("--section", args->sections,
-                  "Cut the model open with a plane X,Y,Z,NX,NY,NZ (world metres; the normal points "
-                  "to the side removed; repeatable, at most 6)")
-      ->allow_extra_args(false);
-  cmd->add_option("--section-box", args->section_box,
-                  "Keep only what lies inside the box MIN MAX (x,y,z each, world metres)")
-      ->expected(2);
-  cmd->add_flag("--xray-others", args->xray_others,
-                "Draw the objects not isolated (or, with --select alone, not selected) ghosted "
-                "instead of hiding them");
+  addReviewStateOptions(*cmd, args->state);
+  cmd->add_option("--viewpoint", args->viewpoint,
+                  "Render from a BCF viewpoint: FILE.bcfzip or FILE.bcfzip#N (the Nth viewpoint as "
+                  "`terawalk bcf list` numbers them; default 1), with its selection, visibility, "
+                  "colours and clipping planes");
   cmd->add_flag("--check-occlusion", args->check_occlusion,
                 "Draw each frame's cut again without occlusion culling and count the pixels "
                 "whose object id differs (occlusion_lost_px)");
