@@ -15,7 +15,7 @@ seconds=${1:-15}
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(ply obj stl gltf glb tws ifc step package camera_path)
+  targets=(ply obj stl gltf glb tws ifc step package camera_path bcf)
 fi
 build=${TERAWALK_FUZZ_BUILD_DIR:-build/fuzz}
 jobs=${TERAWALK_FUZZ_JOBS:-1}

@@ -915,7 +915,7 @@ class IfcImporter {
   std::unordered_map<uint64_t, std::string> layer_of_;
   std::map<std::string, uint32_t> layers_;
   uint32_t next_id_ = 0, products_ = 0;
-  int uncut_ = 0, skipped_warnings_ = 0, profile_voids_ = 0;
+  int uncut_ = 0, skipped_warnings_ = 0;
   std::unordered_map<uint64_t, std::vector<uint64_t>> openings_of_;  // host -> opening products
   // The product being imported.
   std::string product_type_;

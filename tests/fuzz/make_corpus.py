@@ -114,6 +114,50 @@ def camera_path_seeds():
         "0.5 7.0710678118654755 7.0710678118654755 2 225 -10 60\n1 0 10 2 270 -12.5 55\n")
 
 
+BCF_MARKUP = """<?xml version="1.0" encoding="UTF-8"?>
+<Markup><Header><Files><File IfcProject="2SugUv4EX5LAhcVpDp2dUH"><Filename>a.ifc</Filename></File>
+</Files></Header><Topic Guid="11111111-2222-4333-8444-555555555555" TopicType="Issue"
+TopicStatus="Open"><Title>Seed</Title><Index>1</Index><Labels><Label>l</Label></Labels>
+<CreationDate>2026-01-01T00:00:00Z</CreationDate><CreationAuthor>a</CreationAuthor>
+<Comments><Comment Guid="21111111-2222-4333-8444-555555555555"><Date>2026-01-01T00:00:00Z</Date>
+<Author>a</Author><Comment>c</Comment><Viewpoint Guid="31111111-2222-4333-8444-555555555555"/>
+</Comment></Comments><Viewpoints><ViewPoint Guid="31111111-2222-4333-8444-555555555555">
+<Viewpoint>v.bcfv</Viewpoint><Snapshot>s.png</Snapshot><Index>0</Index></ViewPoint></Viewpoints>
+</Topic></Markup>
+"""
+BCF_VISINFO = """<?xml version="1.0" encoding="UTF-8"?>
+<VisualizationInfo Guid="31111111-2222-4333-8444-555555555555"><Components>
+<Selection><Component IfcGuid="1E8YkwPMfB$h99jtn_uAjI"/></Selection>
+<Visibility DefaultVisibility="false"><ViewSetupHints SpacesVisible="false"/><Exceptions>
+<Component><OriginatingSystem>TeraWalk</OriginatingSystem><AuthoringToolId>P-1</AuthoringToolId>
+</Component></Exceptions></Visibility><Coloring><Color Color="FF8000"><Components>
+<Component IfcGuid="1BGpia0iv9cfH1lqT0_P80"/></Components></Color></Coloring></Components>
+<PerspectiveCamera><CameraViewPoint><X>1</X><Y>2</Y><Z>3</Z></CameraViewPoint>
+<CameraDirection><X>0</X><Y>1</Y><Z>0</Z></CameraDirection><CameraUpVector><X>0</X><Y>0</Y>
+<Z>1</Z></CameraUpVector><FieldOfView>60</FieldOfView><AspectRatio>1.5</AspectRatio>
+</PerspectiveCamera><ClippingPlanes><ClippingPlane><Location><X>0</X><Y>0</Y><Z>1</Z></Location>
+<Direction><X>0</X><Y>0</Y><Z>1</Z></Direction></ClippingPlane></ClippingPlanes>
+</VisualizationInfo>
+"""
+
+
+def bcf_seeds():
+    """A BCF 3.0 archive (markup, visualisation, snapshot), and its two documents alone."""
+    import io
+    import zipfile
+    buffer = io.BytesIO()
+    folder = "11111111-2222-4333-8444-555555555555/"
+    entries = [("bcf.version", '<Version VersionId="3.0"/>'), (folder + "markup.bcf", BCF_MARKUP),
+               (folder + "v.bcfv", BCF_VISINFO),
+               (folder + "s.png", b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR\0\0\0\x02\0\0\0\x01")]
+    with zipfile.ZipFile(buffer, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in entries:  # a fixed date, so the seed is the same every time
+            z.writestr(zipfile.ZipInfo(name, (2026, 1, 1, 0, 0, 0)), data, zipfile.ZIP_DEFLATED)
+    put("bcf", "topic-3.0.bcfzip", buffer.getvalue())
+    put("bcf", "markup.xml", BCF_MARKUP)
+    put("bcf", "visinfo.xml", BCF_VISINFO)
+
+
 def copy_shared(target, source, name):
     folder = os.path.join(ROOT, target)
     os.makedirs(folder, exist_ok=True)
@@ -144,5 +188,6 @@ if __name__ == "__main__":
     stl_seeds()
     gltf_seeds()
     camera_path_seeds()
+    bcf_seeds()
     if len(sys.argv) > 1:
         terawalk_seeds(os.path.abspath(sys.argv[1]))
