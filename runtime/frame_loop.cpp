@@ -245,9 +245,20 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     drawWithHzb(eye, draw_list, parametric_list, stats);
   else
     drawWithoutHzb(mode, eye, draw_list, stats);
+  if (moved_ && !moved_->empty()) {
+    moved_->draw(*renderer_, eye, last_projection_ * last_rotation_);
+    stats.triangles_drawn += moved_->triangles();
+  }
   drawGhostsAndOutlines(eye, cut_list, parametric_cut, stats);
   finishFrame(frame_start, stats);
   return stats;
+}
+
+void Walkthrough::setMovedObjects(std::vector<MovedMesh> meshes) {
+  if (!moved_) moved_ = std::make_unique<MovedObjectsPass>();
+  object_states_.setAll(kObjectMoved, false);
+  for (const MovedMesh& m : meshes) object_states_.set(m.object, kObjectMoved, true);
+  moved_->set(std::move(meshes));
 }
 
 FrameStats Walkthrough::renderSettled(const Camera& camera, bool* settled, int max_frames) {

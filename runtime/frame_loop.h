@@ -29,6 +29,7 @@
 #include "object_states.h"
 #include "occlusion_culler.h"
 #include "package_view.h"
+#include "moved_objects_pass.h"
 #include "pager.h"
 #include "parametrics/parametric_renderer.h"
 
@@ -114,6 +115,10 @@ class Walkthrough {
   // Section planes in world coordinates (section_planes.h; at most kMaxSectionPlanes: six
   // planes and a box), applied from the next frame on to every draw path; empty: none.
   void setSections(std::span<const SectionPlane> world_planes);
+  // Objects moved by review edits (moved_objects_pass.h), drawn through their moves from their
+  // full-resolution geometry in every frame; they get kObjectMoved and every other object loses
+  // it, so the clusters leave them out at every level. Empty: nothing moved.
+  void setMovedObjects(std::vector<MovedMesh> meshes);
   // World bounds of the model (double), for cameras and paths.
   glm::dvec3 worldMin() const;
   glm::dvec3 worldMax() const;
@@ -161,6 +166,7 @@ class Walkthrough {
   std::vector<DrawItem> items_;
   std::unique_ptr<OcclusionCuller> culler_;
   std::unique_ptr<ParametricRenderer> parametric_;
+  std::unique_ptr<MovedObjectsPass> moved_;
   std::vector<uint32_t> all_parametric_;   // reference mode: every parametric cluster
   std::vector<uint32_t> last_parametric_;  // the last frame's parametric clusters (whole cut)
   // hzb: the cut's mesh and parametric clusters together, and each pass split by kind.

@@ -131,14 +131,15 @@ const vec4 kGhost = vec4(0.34, 0.46, 0.66, 1.0);
 const uint kObjectHidden = )" + std::to_string(tw::kObjectHidden) +
          "u, kObjectSelected = " + std::to_string(tw::kObjectSelected) +
          "u, kObjectXray = " + std::to_string(tw::kObjectXray) +
-         "u, kObjectRecolored = " + std::to_string(tw::kObjectRecolored) + R"(u;
+         "u, kObjectRecolored = " + std::to_string(tw::kObjectRecolored) +
+         "u, kObjectMoved = " + std::to_string(tw::kObjectMoved) + R"(u;
 uint objectFlags(uint object) {
   return object < object_color_count ? object_states[object].flags : 0u;
 }
 // As objectLook (object_states.h): whether the object is drawn ghosted, or not at all.
 bool objectSkipped(uint object) {
   uint flags = objectFlags(object);
-  if ((flags & kObjectHidden) != 0u) return true;
+  if ((flags & (kObjectHidden | kObjectMoved)) != 0u) return true;
   bool ghosted = (flags & kObjectXray) != 0u && (flags & kObjectSelected) == 0u;
   return ghosted != (surface_pass == 1u);
 }

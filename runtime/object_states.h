@@ -27,6 +27,9 @@ inline constexpr uint32_t kObjectHidden = 1u;     // drawn nowhere, occludes not
 inline constexpr uint32_t kObjectSelected = 2u;   // tinted and outlined, opaque even if X-rayed
 inline constexpr uint32_t kObjectXray = 4u;       // ghosted: translucent, no depth, no id
 inline constexpr uint32_t kObjectRecolored = 8u;  // color_rgba replaces the object's colour
+// Moved by a review edit: the package's clusters do not draw it (at any level, like hidden), the
+// moved-objects pass draws it at its new placement (moved_objects_pass.h).
+inline constexpr uint32_t kObjectMoved = 16u;
 
 enum class ObjectLook : uint8_t { Hidden, Opaque, Ghosted };
 
@@ -34,7 +37,7 @@ enum class ObjectLook : uint8_t { Hidden, Opaque, Ghosted };
 enum class SurfacePass : uint8_t { Opaque, Xray };
 
 inline ObjectLook objectLook(uint32_t flags) {
-  if (flags & kObjectHidden) return ObjectLook::Hidden;
+  if (flags & (kObjectHidden | kObjectMoved)) return ObjectLook::Hidden;
   if ((flags & kObjectXray) && !(flags & kObjectSelected)) return ObjectLook::Ghosted;
   return ObjectLook::Opaque;
 }

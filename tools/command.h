@@ -33,5 +33,6 @@ void registerPickCommand(CLI::App& app, const GlobalOptions& global);
 void registerFindCommand(CLI::App& app, const GlobalOptions& global);
 void registerMeasureCommand(CLI::App& app, const GlobalOptions& global);
 void registerBcfCommand(CLI::App& app, const GlobalOptions& global);
+void registerChangesCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

@@ -24,6 +24,7 @@ int main(int argc, char** argv) {
   tw::registerMeasureCommand(app, global);
   tw::registerFindCommand(app, global);
   tw::registerBcfCommand(app, global);
+  tw::registerChangesCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

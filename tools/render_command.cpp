@@ -27,6 +27,7 @@
 #include "image_compare.h"
 #include "object_queries.h"
 #include "bcf_viewpoint_option.h"
+#include "change_set_view.h"
 #include "review_state_options.h"
 #include "section_planes.h"
 #include "snapshot_camera.h"
@@ -77,6 +78,7 @@ struct RenderArgs {
   // Per-object state and sections along the whole path (object_states.h, section_planes.h).
   ReviewStateArgs state;
   std::string viewpoint;  // FILE.bcfzip[#N]
+  std::string changes;    // a change set (model.changes.json)
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -461,6 +463,11 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   std::optional<ViewpointApplied> viewpoint;
   if (!args.viewpoint.empty())
     viewpoint = applyViewpointOption(args.viewpoint, walk.package(), walk.objectStates(), Camera{});
+  if (!args.changes.empty()) {
+    const ChangeSet changes = readChangeSet(args.changes);
+    applyChangeStates(changes, walk.package(), walk.objectStates());
+    walk.setMovedObjects(movedMeshes(changes, walk.package()));
+  }
   applyReviewState(args.state, walk.package(), walk.objectStates());
   std::vector<SectionPlane> sections = reviewSectionPlanes(args.state);
   if (viewpoint) sections.insert(sections.end(), viewpoint->sections.begin(), viewpoint->sections.end());
@@ -589,6 +596,10 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--hzb-final-rebuild,!--no-hzb-final-rebuild", args->hzb_final_rebuild,
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
   addReviewStateOptions(*cmd, args->state);
+  cmd->add_option("--changes", args->changes,
+                  "Draw a review's change set (model.changes.json): moved objects at their new "
+                  "placement, hidden and recoloured ones")
+      ->check(CLI::ExistingFile);
   cmd->add_option("--viewpoint", args->viewpoint,
                   "Render from a BCF viewpoint: FILE.bcfzip or FILE.bcfzip#N (the Nth viewpoint as "
                   "`terawalk bcf list` numbers them; default 1), with its selection, visibility, "

@@ -1,0 +1,239 @@
+// Change sets: the JSON file keeps every edit exactly and refuses damaged ones; a moved object
+// is drawn at its new place and not its old one at every level of detail, in impostors and
+// tessellations; `changes apply` carries a move back to the scene, so that the preprocessed new
+// scene has the object at its new place.
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "camera.h"
+#include "camera_path.h"
+#include "change_set.h"
+#include "generated_plant_support.h"
+#include "image_compare.h"
+#include "object_queries.h"
+#include "package_view.h"
+#include "test_support.h"
+
+namespace tw {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kPump = "P-1001-A";
+
+Change makeChange(Change::Kind kind, const std::string& key, const std::string& author,
+                  const std::string& date) {
+  Change c;
+  c.kind = kind;
+  c.key = key;
+  c.author = author;
+  c.date = date;
+  return c;
+}
+
+TEST(ChangeSet, FileKeepsEveryEditExactlyAndUndoRedoWork) {
+  const fs::path dir = test::scratchDir();
+  ChangeSet set;
+  Change move;
+  move.kind = Change::Kind::Move;
+  move.key = kPump;
+  move.author = "ana";
+  move.date = "2026-12-06T14:00:00Z";
+  move.old_pivot = {612345.125, 7012345.0625, 12.5};
+  move.transform = moveTransform(move.old_pivot, {0.4, -0.01, 0.0}, {0, 0, 1}, 0.0872664625997165, 1.0);
+  move.new_pivot = glm::dvec3(move.transform * glm::dvec4(move.old_pivot, 1.0));
+  set.add(move);
+  Change hide = makeChange(Change::Kind::Hide, "V-12", "ana", "2026-12-06T14:01:00Z");
+  set.add(hide);
+  Change colour = makeChange(Change::Kind::Colour, "V-13", "ana", "2026-12-06T14:02:00Z");
+  colour.rgba = 0xff0080ffu;
+  set.add(colour);
+  Change note = makeChange(Change::Kind::Comment, kPump, "ana", "2026-12-06T14:03:00Z");
+  note.text = "clears the walkway now";
+  set.add(note);
+  EXPECT_LE(glm::length(move.new_pivot - move.old_pivot - glm::dvec3(0.4, -0.01, 0.0)), 1e-9)
+      << "a rotation about the pivot leaves the pivot where the translation puts it";
+
+  writeChangeSet(dir / "m.changes.json", set);
+  const ChangeSet back = readChangeSet(dir / "m.changes.json");
+  ASSERT_EQ(back.changes().size(), 4u);
+  const Change& m = back.changes()[0];
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 4; ++r) EXPECT_EQ(m.transform[c][r], move.transform[c][r]) << c << r;
+  EXPECT_EQ(m.old_pivot, move.old_pivot);
+  EXPECT_EQ(m.author, "ana");
+  EXPECT_EQ(back.changes()[1].kind, Change::Kind::Hide);
+  EXPECT_EQ(back.changes()[2].rgba, 0xff0080ffu);
+  EXPECT_EQ(back.changes()[3].text, "clears the walkway now");
+
+  ChangeSet edits = back;
+  EXPECT_TRUE(edits.undo());
+  EXPECT_TRUE(edits.undo());
+  EXPECT_EQ(edits.undoable(), 2u);
+  EXPECT_TRUE(edits.redo());
+  EXPECT_EQ(edits.changes().back().kind, Change::Kind::Colour);
+  edits.add(note);  // a new edit drops what was undone
+  EXPECT_FALSE(edits.redo());
+  EXPECT_EQ(edits.placement(kPump), move.transform);
+  EXPECT_EQ(edits.placement("nothing"), glm::dmat4(1.0));
+
+  // Damaged files: an error naming the file and the change; the file is never rewritten.
+  auto expectError = [&](const std::string& text, const std::string& message) {
+    std::ofstream(dir / "bad.json") << text;
+    try {
+      readChangeSet(dir / "bad.json");
+      ADD_FAILURE() << "accepted: " << text;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find("bad.json"), std::string::npos) << e.what();
+    }
+  };
+  expectError("{\"terawalk_changes\": 1, \"changes\": [", "not JSON");
+  expectError("{\"terawalk_changes\": 2, \"changes\": []}", "version 1");
+  expectError("{\"terawalk_changes\": 1, \"changes\": [{\"kind\": \"move\", \"key\": \"a\", "
+              "\"transform\": [1,0,0]}]}",
+              "change 1: 'transform' is not 16 numbers");
+  expectError("{\"terawalk_changes\": 1, \"changes\": [{\"kind\": \"melt\", \"key\": \"a\"}]}",
+              "unknown kind 'melt'");
+  expectError("{\"terawalk_changes\": 1, \"changes\": [{\"kind\": \"colour\", \"key\": \"a\", "
+              "\"rgba\": \"red\"}]}",
+              "'rgba' 'red' is not RRGGBBAA");
+}
+
+// The pump's world box, and a change set moving it `by` metres.
+struct PumpMove {
+  glm::dvec3 lo, hi;
+  glm::dvec3 by;
+  fs::path changes;
+};
+
+PumpMove movePump(const fs::path& dir, const glm::dvec3& by) {
+  const PackageView view = PackageView::open(test::generatedPlant().package);
+  PumpMove out;
+  out.by = by;
+  EXPECT_TRUE(objectsBounds(view, objectsWithKeys(view, {kPump}), out.lo, out.hi));
+  ChangeSet set;
+  Change move = makeChange(Change::Kind::Move, kPump, "test", "2026-12-06T00:00:00Z");
+  move.old_pivot = 0.5 * (out.lo + out.hi);
+  move.transform = moveTransform(move.old_pivot, by);
+  move.new_pivot = move.old_pivot + by;
+  set.add(move);
+  out.changes = dir / "plant.changes.json";
+  writeChangeSet(out.changes, set);
+  return out;
+}
+
+// Pixels of a box's projection on the image (its eight corners' screen rectangle).
+struct ScreenRect {
+  double x0 = 1e30, y0 = 1e30, x1 = -1e30, y1 = -1e30;
+  bool contains(double x, double y, double margin) const {
+    return x >= x0 - margin && x <= x1 + margin && y >= y0 - margin && y <= y1 + margin;
+  }
+};
+
+ScreenRect project(const Camera& camera, int width, int height, const glm::dvec3& lo,
+                   const glm::dvec3& hi) {
+  const glm::dmat4 m = camera.projection(double(width) / height) * camera.viewRotation();
+  ScreenRect r;
+  for (int k = 0; k < 8; ++k) {
+    const glm::dvec3 p((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+    const glm::dvec4 c = m * glm::dvec4(p - camera.position, 1.0);
+    const double x = (c.x / c.w * 0.5 + 0.5) * width, y = (0.5 - c.y / c.w * 0.5) * height;
+    r.x0 = std::min(r.x0, x);
+    r.x1 = std::max(r.x1, x);
+    r.y0 = std::min(r.y0, y);
+    r.y1 = std::max(r.y1, y);
+  }
+  return r;
+}
+
+TEST(ChangeSet, AMovedObjectIsDrawnAtItsNewPlaceAndNotItsOldOneAtEveryLevel) {
+  const fs::path dir = test::scratchDir();
+  const PackageView view = PackageView::open(test::generatedPlant().package);
+  const std::vector<uint32_t> pump = objectsWithKeys(view, {kPump});
+  ASSERT_FALSE(pump.empty());
+  // Moved sideways by twice its width, seen from the side and a little above, the rest of the
+  // plant hidden so that nothing stands in front of it.
+  glm::dvec3 lo, hi;
+  ASSERT_TRUE(objectsBounds(view, pump, lo, hi));
+  const double size = glm::length(hi - lo);
+  const PumpMove move = movePump(dir, {2.5 * (hi.x - lo.x) + 0.5, 0.0, 0.0});
+  const glm::dvec3 centre = 0.5 * (lo + hi) + 0.5 * move.by;
+  Camera camera;
+  camera.position = centre + glm::dvec3(0.0, -3.0 * size, 1.0 * size);
+  camera.lookAt(centre);
+  CameraPath still;
+  still.keys.push_back({0.0, camera});
+  writeCameraPath(still, dir / "still.path");
+  const int width = 320, height = 200;
+  const ScreenRect old_rect = project(camera, width, height, lo, hi);
+  const ScreenRect new_rect = project(camera, width, height, lo + move.by, hi + move.by);
+  ASSERT_TRUE(old_rect.x1 < new_rect.x0) << "the two places must not overlap on screen";
+
+  for (const std::string variant : {"--tau 1", "--tau 24", "--reference", "--parametrics impostor",
+                                    "--parametrics tessellated"}) {
+    SCOPED_TRACE(variant);
+    for (const bool moved : {false, true}) {
+      const fs::path out = dir / (std::string(moved ? "moved" : "still") + std::to_string(variant.size()));
+      const test::CommandResult r = test::runTerawalk(
+          "render --quiet " + test::generatedPlant().package.string() + " --path " +
+          (dir / "still.path").string() + " --size 320x200 --png --out " + out.string() + " " +
+          variant + " --isolate-keys " + kPump + (moved ? " --changes " + move.changes.string() : ""));
+      ASSERT_EQ(r.exit_code, 0) << r.output;
+      const std::vector<uint32_t> ids = idsFromRgba(readPngRgba(out / "ids_00000.png").rgba);
+      size_t at_old = 0, at_new = 0, elsewhere = 0;
+      for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+          const uint32_t id = ids[size_t(y) * width + x];
+          if (id == 0 || std::find(pump.begin(), pump.end(), id - 1) == pump.end()) continue;
+          if (old_rect.contains(x + 0.5, y + 0.5, 1.5)) ++at_old;
+          else if (new_rect.contains(x + 0.5, y + 0.5, 1.5)) ++at_new;
+          else ++elsewhere;
+        }
+      if (moved) {
+        EXPECT_EQ(at_old, 0u) << "nothing of the pump stays at its old place";
+        EXPECT_GT(at_new, 100u) << "the pump shows at its new place";
+      } else {
+        EXPECT_GT(at_old, 100u) << "the pump shows where it stands";
+        EXPECT_EQ(at_new, 0u);
+      }
+      EXPECT_EQ(elsewhere, 0u);
+    }
+  }
+}
+
+TEST(ChangeSet, ApplyingAMoveToTheScenePutsThePumpAtItsNewPlaceInTheNewPackage) {
+  const fs::path dir = test::scratchDir();
+  const PumpMove move = movePump(dir, {0.4, -1.25, 0.0});
+  const fs::path scene = dir / "moved.tws", package = dir / "moved.twk";
+  test::CommandResult r = test::runTerawalk("changes apply " + test::generatedPlant().scene.string() +
+                                            " " + move.changes.string() + " -o " + scene.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 objects moved"), std::string::npos) << r.output;
+  r = test::runTerawalk("preprocess --quiet " + scene.string() + " -o " + package.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const PackageView view = PackageView::open(package);
+  glm::dvec3 lo, hi;
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {kPump}), lo, hi));
+  // Both packages quantize positions on their own grids: a few tens of micrometres.
+  EXPECT_LE(glm::length(lo - (move.lo + move.by)), 1e-3);
+  EXPECT_LE(glm::length(hi - (move.hi + move.by)), 1e-3);
+
+  // A key the scene lacks: an error naming it, and nothing written.
+  std::ofstream(dir / "ghost.json") << "{\"terawalk_changes\": 1, \"changes\": [{\"kind\": \"move\", "
+                                       "\"key\": \"P-0000\", \"transform\": [1,0,0,0,0,1,0,0,0,0,1,0,1,0,0,1], "
+                                       "\"old_pivot\": [0,0,0], \"new_pivot\": [1,0,0]}]}";
+  r = test::runTerawalk("changes apply " + test::generatedPlant().scene.string() + " " +
+                        (dir / "ghost.json").string() + " -o " + (dir / "ghost.tws").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("has the key 'P-0000'; nothing written"), std::string::npos) << r.output;
+  EXPECT_FALSE(fs::exists(dir / "ghost.tws"));
+}
+
+}  // namespace
+}  // namespace tw
