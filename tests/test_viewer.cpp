@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <set>
 #include <chrono>
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <string>
 #include <thread>
 
@@ -17,6 +19,8 @@
 #include "generated_plant_support.h"
 #include "test_support.h"
 #include "x_screen_support.h"
+#include "change_set.h"
+#include "object_queries.h"
 
 namespace tw {
 namespace {
@@ -339,6 +343,97 @@ TEST(Viewer, ReviewPanelQueriesIsolatesAndRestoresSets) {
   EXPECT_NE(damaged.log.find("plant.sets.json: not JSON"), std::string::npos) << damaged.log;
   EXPECT_NE(damaged.log.find("set 'again' not saved"), std::string::npos) << damaged.log;
   EXPECT_EQ(test::readFile(dir / "plant.sets.json"), "{\"terawalk_selection_sets\": 1, \"sets\": [");
+}
+
+
+// Pixels in the gizmo's axis colours (view_edits.cpp kAxisColours), drawn over the frame.
+int gizmoPixels(const test::ScreenImage& screen, int x0, int y0, int x1, int y1) {
+  int n = 0;
+  for (int y = y0; y < y1; ++y)
+    for (int x = x0; x < x1; ++x) {
+      const uint8_t* p = screen.at(x, y);
+      n += (p[0] == 220 && p[1] == 50 && p[2] == 40) || (p[0] == 40 && p[1] == 180 && p[2] == 60) ||
+           (p[0] == 50 && p[1] == 90 && p[2] == 230);
+    }
+  return n;
+}
+
+// The way back to CAD as a reviewer takes it: in the viewer (scripted), the pump P-1001-A is
+// found, selected and framed; its gizmo's Z arrow is dragged up on the X screen, and it is moved
+// 0.4 m along X; the last edit is undone and redone, and the change set saved. `changes apply`
+// writes the moves into the scene, and the preprocessed new scene has the pump at its new place.
+// The X screen shows the gizmo on the pump; the capture is kept as x-screen-gizmo.png.
+TEST(Viewer, TheGizmoMovesAPumpAndTheChangeSetCarriesItToTheScene) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  // Framed, the pump's centre is the window's centre; its Z arrow points up from there.
+  const ScriptedRun run = runViewerScript(
+      package, dir, "gizmo",
+      "20 search P-1001-A\n22 select-results\n24 zoom-results\n40 drag 512 320 512 270\n"
+      "50 move 0.4,0,0\n60 undo\n62 redo\n70 save-changes\n150 quit\n",
+      "edits: gizmo drag", "changes saved");
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  ASSERT_TRUE(run.before) << run.log;
+  ASSERT_TRUE(run.after) << run.log;
+  writePngRgba(dir / "x-screen-gizmo.png", run.after->width, run.after->height, run.after->rgba);
+  EXPECT_GT(gizmoPixels(*run.after, 300, 150, 724, 618), 200) << "the gizmo is drawn on the pump";
+
+  const ChangeSet changes = readChangeSet(dir / "plant.changes.json");
+  ASSERT_EQ(changes.changes().size(), 2u) << run.log;
+  const Change& lift = changes.changes()[0];
+  const glm::dvec3 up = lift.new_pivot - lift.old_pivot;
+  EXPECT_EQ(lift.key, "P-1001-A");
+  EXPECT_EQ(up.x, 0.0);
+  EXPECT_EQ(up.y, 0.0);
+  EXPECT_GT(up.z, 0.0) << "dragged up along Z";
+  EXPECT_NEAR(up.z / 0.01, std::round(up.z / 0.01), 1e-6) << "snapped to 10 mm";
+  const glm::dvec3 along = changes.changes()[1].new_pivot - changes.changes()[1].old_pivot;
+  EXPECT_LE(glm::length(along - glm::dvec3(0.4, 0.0, 0.0)), 1e-9);
+
+  const PackageView view = PackageView::open(package);
+  glm::dvec3 lo, hi;
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {"P-1001-A"}), lo, hi));
+  test::CommandResult r = test::runTerawalk("changes apply " + test::generatedPlant().scene.string() +
+                                            " " + (dir / "plant.changes.json").string() + " -o " +
+                                            (dir / "moved.tws").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  r = test::runTerawalk("preprocess --quiet " + (dir / "moved.tws").string() + " -o " +
+                        (dir / "moved.twk").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const PackageView moved = PackageView::open(dir / "moved.twk");
+  glm::dvec3 lo2, hi2;
+  ASSERT_TRUE(objectsBounds(moved, objectsWithKeys(moved, {"P-1001-A"}), lo2, hi2));
+  EXPECT_LE(glm::length(lo2 - (lo + up + along)), 1e-3);
+  EXPECT_LE(glm::length(hi2 - (hi + up + along)), 1e-3);
+}
+
+// The exploded view: the pumps pushed from their common centre (the X screen changes), then
+// collapsed: the screen over the model is what it was before.
+TEST(Viewer, ExplodingAndCollapsingGivesTheOriginalFrame) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  const ScriptedRun exploded = runViewerScript(
+      package, dir, "explode", "20 search pump\n22 select-results\n60 explode 3\n150 quit\n",
+      "explode to 3.00", "explode to 3.00");
+  const ScriptedRun collapsed = runViewerScript(
+      package, dir, "collapse",
+      "20 search pump\n22 select-results\n60 explode 3\n100 collapse\n200 quit\n",
+      "explode to 3.00", "explode to 1.00");
+  ASSERT_EQ(exploded.exit_code, 0) << exploded.log;
+  ASSERT_EQ(collapsed.exit_code, 0) << collapsed.log;
+  ASSERT_TRUE(exploded.before && exploded.after && collapsed.before && collapsed.after);
+  auto differing = [](const test::ScreenImage& a, const test::ScreenImage& b) {
+    int n = 0;  // over the model, clear of the panels
+    for (int y = 200; y < 480; ++y)
+      for (int x = 300; x < 700; ++x) n += std::memcmp(a.at(x, y), b.at(x, y), 3) != 0;
+    return n;
+  };
+  EXPECT_GT(differing(*exploded.before, *exploded.after), 500) << "the pumps moved apart";
+  EXPECT_EQ(differing(*collapsed.before, *collapsed.after), 0) << "collapsed, as before";
 }
 
 }  // namespace

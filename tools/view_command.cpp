@@ -37,6 +37,9 @@
 #include "package_database.h"
 #include "project_database.h"
 #include "selection_sets.h"
+#include "change_set.h"
+#include "snapshot_camera.h"
+#include "view_edits.h"
 #include "view_review.h"
 #include "view_script.h"
 #include "view_selection.h"
@@ -83,14 +86,15 @@ struct Navigator {
   bool dragging = false;
   double last_x = 0.0, last_y = 0.0;
 
-  void update(GLFWwindow* window, Camera& camera, double dt) {
-    const bool ui_mouse = ImGui::GetIO().WantCaptureMouse;
+  // `mouse_taken`: the gizmo holds the mouse (a handle is being dragged).
+  void update(GLFWwindow* window, Camera& camera, double dt, bool mouse_taken) {
+    const bool ui_mouse = ImGui::GetIO().WantCaptureMouse || mouse_taken;
     const bool ui_keys = ImGui::GetIO().WantCaptureKeyboard;
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window, &x, &y);
     const bool down = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
     if (down && !dragging && !ui_mouse) dragging = true;
-    if (!down) dragging = false;
+    if (!down || mouse_taken) dragging = false;
     if (dragging) {
       const double k = 0.003;
       camera.yaw_rad -= (x - last_x) * k;
@@ -257,13 +261,16 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 // (left, below the statistics, as tall as the window allows; it scrolls).
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
-                 int window_width, int window_height) {
+                 ViewEdits& edits, const Camera& camera, double now_s, int window_width,
+                 int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   drawStatsPanel(stats, settings, nav, recording);
   selection.drawPanel(float(window_width) - 8.0f, 8.0f);
   review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
+  edits.drawPanel(float(window_width) - 8.0f, float(window_height) - 280.0f, now_s);
+  edits.drawGizmo(camera, window_width, window_height);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
 }
@@ -276,7 +283,8 @@ class ClickDetector {
     int x, y;
     bool ctrl, twice;
   };
-  std::optional<Click> update(GLFWwindow* window, double now_s) {
+  // `mouse_taken`: the press went to the gizmo, so its release is no click.
+  std::optional<Click> update(GLFWwindow* window, double now_s, bool mouse_taken) {
     double x = 0.0, y = 0.0;
     glfwGetCursorPos(window, &x, &y);
     const bool down = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
@@ -284,7 +292,7 @@ class ClickDetector {
     if (down && !was_down_) {
       press_x_ = x;
       press_y_ = y;
-      pressed_over_ui_ = ImGui::GetIO().WantCaptureMouse;
+      pressed_over_ui_ = ImGui::GetIO().WantCaptureMouse || mouse_taken;
     } else if (!down && was_down_ && !pressed_over_ui_ &&
                std::abs(x - press_x_) + std::abs(y - press_y_) < 4.0) {
       const bool ctrl = glfwGetKey(window, GLFW_KEY_LEFT_CONTROL) == GLFW_PRESS ||
@@ -352,6 +360,66 @@ void runReviewAction(ViewReview& review, const ViewEvent& e) {
   }
 }
 
+// An edit of a script, done as the gizmo or the Edit panel does it. `toFramebuffer` turns window
+// pixels into framebuffer pixels, the gizmo's.
+void runEditAction(ViewEdits& edits, const ViewEvent& e, const Camera& camera, int fb_w, int fb_h,
+                   double now_s, const std::function<glm::dvec2(double, double)>& toFramebuffer) {
+  const std::string& a = e.action;
+  auto number = [&](const std::string& text) {
+    try {
+      return std::stod(text);
+    } catch (const std::exception&) {
+      std::fprintf(stderr, "terawalk: %s: '%s' is not a number\n", a.c_str(), text.c_str());
+      return std::nan("");
+    }
+  };
+  if (a == "move") {
+    try {
+      edits.moveSelection(parseVec3(e.text));
+    } catch (const std::exception& error) {
+      std::fprintf(stderr, "terawalk: move: %s\n", error.what());
+    }
+  } else if (a == "rotate") {
+    if (const double d = number(e.text); std::isfinite(d)) edits.rotateSelection({0, 0, 1}, d);
+  } else if (a == "scale") {
+    if (const double f = number(e.text); std::isfinite(f)) edits.scaleSelection(f);
+  } else if (a == "explode") {
+    if (const double f = number(e.text); std::isfinite(f)) edits.explode(f, now_s);
+  } else if (a == "collapse") {
+    edits.collapse(now_s);
+  } else if (a == "hide-selection") {
+    edits.hideSelection();
+  } else if (a == "comment") {
+    edits.commentSelection(e.text);
+  } else if (a == "undo") {
+    edits.undo();
+  } else if (a == "redo") {
+    edits.redo();
+  } else if (a == "save-changes") {
+    edits.save();
+  } else if (a == "drag") {
+    double x0, y0, x1, y1;
+    if (std::sscanf(e.text.c_str(), "%lf %lf %lf %lf", &x0, &y0, &x1, &y1) != 4) {
+      std::fprintf(stderr, "terawalk: drag: expected X0 Y0 X1 Y1, got '%s'\n", e.text.c_str());
+      return;
+    }
+    const glm::dvec2 p0 = toFramebuffer(x0, y0), p1 = toFramebuffer(x1, y1);
+    if (!edits.press(camera, fb_w, fb_h, p0.x, p0.y)) {
+      std::printf("edits: drag at %.0f,%.0f: no gizmo handle there\n", x0, y0);
+      return;
+    }
+    edits.dragTo(p1.x, p1.y);
+    edits.release();
+  }
+}
+
+bool isEditAction(const std::string& a) {
+  for (const char* edit : {"move", "rotate", "scale", "explode", "collapse", "hide-selection",
+                           "comment", "undo", "redo", "save-changes", "drag"})
+    if (a == edit) return true;
+  return false;
+}
+
 WalkthroughOptions viewOptions(const ViewArgs& args, GLFWwindow* window) {
   WalkthroughOptions options;
   glfwGetFramebufferSize(window, &options.width, &options.height);
@@ -399,11 +467,14 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   ViewSelection selection(walk.package(), walk.objectStates(), db);
   ViewReview review(walk.package(), walk.objectStates(), selection, db,
                     selectionSetsPathFor(args.file));
+  const char* user = std::getenv("USER");
+  ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
   ClickDetector clicks;
   const std::vector<ViewEvent> script =
       args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
   size_t next_event = 0;
   bool quit = false;
+  bool mouse_was_down = false;
 
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
@@ -433,7 +504,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       const double span = std::max(replay.durationS(), 1e-6);
       camera = replay.sample(replay.keys.front().time_s + std::fmod(t, span), camera);
     } else {
-      nav.update(window, camera, dt);
+      nav.update(window, camera, dt, edits.capturing());
     }
     camera.fov_y_rad = glm::radians(double(settings.fov_deg));
     camera.near_m = settings.near_m;
@@ -448,12 +519,30 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     walk.setMinFeaturePx(settings.min_feature);
     walk.setOcclusion(static_cast<OcclusionMode>(settings.occlusion_mode));
     walk.setParametrics(static_cast<ParametricMode>(settings.parametric_mode));
+    edits.update(t);
     stats = walk.renderFrame(camera, t);
     settings.tau = float(walk.tau());
 
     // Clicks pick in the frame just drawn, from the mouse and from the script.
     int win_w = 0, win_h = 0;
     glfwGetWindowSize(window, &win_w, &win_h);
+    auto toFramebuffer = [&](double x, double y) {
+      return glm::dvec2(win_w > 0 ? x * fb_w / win_w : x, win_h > 0 ? y * fb_h / win_h : y);
+    };
+    // The gizmo takes a press on one of its handles, and the mouse until the button is up.
+    {
+      double mx = 0.0, my = 0.0;
+      glfwGetCursorPos(window, &mx, &my);
+      const glm::dvec2 m = toFramebuffer(mx, my);
+      const bool down = glfwGetMouseButton(window, GLFW_MOUSE_BUTTON_LEFT) == GLFW_PRESS;
+      if (down && !mouse_was_down && !ImGui::GetIO().WantCaptureMouse)
+        edits.press(camera, fb_w, fb_h, m.x, m.y);
+      else if (down && edits.capturing())
+        edits.dragTo(m.x, m.y);
+      else if (!down)
+        edits.release();
+      mouse_was_down = down;
+    }
     auto pickAt = [&](int x, int y, bool ctrl, bool twice) {
       const int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
       if (px < 0 || py < 0 || px >= walk.renderer().width() || py >= walk.renderer().height())
@@ -461,7 +550,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       selection.click(pickPixel(walk.renderer(), camera, px, py), ctrl);
       if (twice) frameSelection(selection, camera, nav);
     };
-    if (const auto click = clicks.update(window, t))
+    if (const auto click = clicks.update(window, t, edits.capturing()))
       pickAt(click->x, click->y, click->ctrl, click->twice);
     for (; next_event < script.size() && script[next_event].frame <= frame; ++next_event) {
       const ViewEvent& e = script[next_event];
@@ -470,7 +559,12 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
         case ViewEvent::Kind::CtrlClick: pickAt(e.x, e.y, true, false); break;
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
-        case ViewEvent::Kind::Review: runReviewAction(review, e); break;
+        case ViewEvent::Kind::Review:
+          if (isEditAction(e.action))
+            runEditAction(edits, e, camera, fb_w, fb_h, t, toFramebuffer);
+          else
+            runReviewAction(review, e);
+          break;
         case ViewEvent::Kind::Key:
           if (e.key == GLFW_KEY_ESCAPE) escape();
           if (e.key == GLFW_KEY_O) nav.orbit = !nav.orbit;
@@ -488,7 +582,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       saveScreenshot(walk.renderer(), name);
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
-    drawOverlay(stats, settings, nav, recorder.on, selection, review, fb_w, fb_h);
+    drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

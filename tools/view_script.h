@@ -16,6 +16,10 @@
 //   FRAME query TEXT         a WHERE clause over the project database (no values bound)
 //   FRAME select-results | isolate-results | zoom-results
 //   FRAME save-selection TEXT | save-visibility TEXT | restore TEXT
+// and the edits (view_edits.h) of the selection:
+//   FRAME move DX,DY,DZ | rotate DEGREES (about Z) | scale FACTOR | explode FACTOR | collapse
+//   FRAME drag X0 Y0 X1 Y1   a gizmo handle pressed at X0,Y0 and dragged to X1,Y1 (window pixels)
+//   FRAME hide-selection | comment TEXT | undo | redo | save-changes
 //
 // Events run after their frame is drawn, in file order.
 #pragma once

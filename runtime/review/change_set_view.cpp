@@ -30,24 +30,35 @@ std::vector<uint32_t> objectsOfChangeKey(const PackageView& view, const std::str
   return objects;
 }
 
+std::vector<MovedMesh> objectMeshes(const PackageView& view, const std::vector<uint32_t>& objects) {
+  std::vector<MovedMesh> meshes;
+  for (uint32_t object : objects) {
+    glm::dvec3 lo, hi;
+    const uint32_t one[] = {object};
+    const double size = objectsBounds(view, one, lo, hi) ? glm::length(hi - lo) : 1.0;
+    const MeasureShape shape = measureShape(view, one, std::max(1e-3, 1e-3 * size));
+    MovedMesh mesh;
+    mesh.object = object;
+    if (!shape.triangles.empty()) mesh.anchor = shape.triangles.front()[0];
+    for (const Triangle3d& t : shape.triangles)
+      for (const glm::dvec3& p : t) mesh.triangles.push_back(glm::vec3(p - mesh.anchor));
+    meshes.push_back(std::move(mesh));
+  }
+  return meshes;
+}
+
+glm::dmat4 packageMove(const PackageView& view, const glm::dmat4& world) {
+  // p_pkg -> world(p_pkg + origin) - origin.
+  const glm::dvec3 origin = view.origin();
+  return glm::translate(glm::dmat4(1.0), -origin) * world * glm::translate(glm::dmat4(1.0), origin);
+}
+
 std::vector<MovedMesh> movedMeshes(const ChangeSet& changes, const PackageView& view) {
   std::vector<MovedMesh> meshes;
-  const glm::dvec3 origin = view.origin();
   for (const std::string& key : changes.movedKeys()) {
-    // The world move in the package frame: p_pkg -> move(p_pkg + origin) - origin.
-    const glm::dmat4 move = glm::translate(glm::dmat4(1.0), -origin) * changes.placement(key) *
-                            glm::translate(glm::dmat4(1.0), origin);
-    for (uint32_t object : requireObjects(view, key)) {
-      glm::dvec3 lo, hi;
-      const uint32_t one[] = {object};
-      const double size = objectsBounds(view, one, lo, hi) ? glm::length(hi - lo) : 1.0;
-      const MeasureShape shape = measureShape(view, one, std::max(1e-3, 1e-3 * size));
-      MovedMesh mesh;
-      mesh.object = object;
+    const glm::dmat4 move = packageMove(view, changes.placement(key));
+    for (MovedMesh& mesh : objectMeshes(view, requireObjects(view, key))) {
       mesh.move = move;
-      if (!shape.triangles.empty()) mesh.anchor = shape.triangles.front()[0];
-      for (const Triangle3d& t : shape.triangles)
-        for (const glm::dvec3& p : t) mesh.triangles.push_back(glm::vec3(p - mesh.anchor));
       meshes.push_back(std::move(mesh));
     }
   }

@@ -16,6 +16,13 @@ namespace tw {
 // Objects the change set's key names: by database key, else by name. Empty when none has it.
 std::vector<uint32_t> objectsOfChangeKey(const PackageView& view, const std::string& key);
 
+// The full-resolution geometry of `objects` for the moved-objects pass, one mesh each, with no
+// move (parametrics tessellated at a thousandth of the object's size, at least a millimetre).
+std::vector<MovedMesh> objectMeshes(const PackageView& view, const std::vector<uint32_t>& objects);
+
+// The world move `world` as a move of the package frame (for MovedMesh::move).
+glm::dmat4 packageMove(const PackageView& view, const glm::dmat4& world);
+
 // The meshes of every moved object of `changes` (parametrics tessellated at a thousandth of the
 // object's size, at least a millimetre), for Walkthrough::setMovedObjects. Throws
 // std::runtime_error naming a key no object has.
