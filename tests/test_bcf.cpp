@@ -14,7 +14,9 @@
 
 #include "bcf_archive.h"
 #include "bcf_ids.h"
+#include "change_set.h"
 #include "format_error.h"
+#include "generated_plant_support.h"
 #include "image_compare.h"
 #include "test_support.h"
 
@@ -405,6 +407,51 @@ TEST(Bcf, BrokenArchivesGetClearErrorsAndTheReviewLosesNothing) {
   std::ifstream after_in(store, std::ios::binary);
   const std::string after((std::istreambuf_iterator<char>(after_in)), {});
   EXPECT_EQ(after.size(), before.size() - 100) << "the damaged review was overwritten";
+}
+
+// The way back for edits: a change set (a pump moved, with a comment) exported as BCF gives one
+// topic for the pump, saying how it moved, with the comment and a viewpoint on the pump at its new
+// place, selected; the archive validates.
+TEST(Bcf, AChangeSetGoesToBcfAsATopicPerObjectWithItsViewpoint) {
+  const fs::path dir = test::scratchDir();
+  const fs::path package = dir / "plant.twk";
+  fs::copy_file(test::generatedPlant().package, package);
+  ChangeSet changes;
+  Change move;
+  move.kind = Change::Kind::Move;
+  move.key = "P-1001-A";
+  move.author = "ana";
+  move.date = "2026-12-06T14:00:00Z";
+  move.old_pivot = {10.0, 20.0, 3.0};
+  move.new_pivot = move.old_pivot + glm::dvec3(0.4, 0.0, 0.0);
+  move.transform = moveTransform(move.old_pivot, {0.4, 0.0, 0.0});
+  changes.add(move);
+  Change note = move;
+  note.kind = Change::Kind::Comment;
+  note.text = "clears the walkway now";
+  changes.add(note);
+  writeChangeSet(dir / "plant.changes.json", changes);
+  for (const std::string version : {"2.1", "3.0"}) {
+    const fs::path archive = dir / ("edits" + version + ".bcfzip");
+    fs::remove(dir / "plant.review.bcfzip");
+    const test::CommandResult r = test::runTerawalk(
+        "-q bcf export " + package.string() + " --changes " + (dir / "plant.changes.json").string() +
+        " -o " + archive.string() + " --version " + version + " --size 320x200");
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    expectArchiveValidates(archive, version, dir);
+    const nlohmann::json list = listJson(archive);
+    ASSERT_EQ(list["topics"].size(), 1u) << list.dump();
+    const nlohmann::json& t = list["topics"][0];
+    EXPECT_EQ(t["title"], "Moved P-1001-A");
+    EXPECT_NE(t["description"].get<std::string>().find("moved by (0.400, 0.000, 0.000) m"),
+              std::string::npos) << t["description"];
+    EXPECT_EQ(t["author"], "ana");
+    ASSERT_EQ(t["comments"].size(), 1u);
+    EXPECT_EQ(t["comments"][0]["text"], "clears the walkway now");
+    ASSERT_EQ(t["viewpoints"].size(), 1u);
+    EXPECT_EQ(guidsOf(t["viewpoints"][0]["selection"]), std::set<std::string>{"P-1001-A"});
+    EXPECT_GT(t["viewpoints"][0]["snapshot_bytes"].get<size_t>(), 1000u);
+  }
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 // them); import merges an archive into the review's own topics (model.review.bcfzip) and says
 // which components the model has; export adds a topic made from a camera and review state (with
 // a snapshot rendered headless) and writes the review's topics as BCF 2.1 or 3.0.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
@@ -17,6 +19,7 @@
 #include "bcf_ids.h"
 #include "bcf_viewpoint.h"
 #include "bcf_viewpoint_option.h"
+#include "change_set_view.h"
 #include "command.h"
 #include "command_args.h"
 #include "egl_context.h"
@@ -230,6 +233,7 @@ struct ExportArgs {
   double fov_deg = 60.0;
   std::string viewpoint;  // FILE.bcfzip[#N]
   std::string size = "1280x720";
+  std::string changes;  // a change set: one topic per object it names
   ReviewStateArgs state;
 };
 
@@ -279,6 +283,84 @@ bcf::Viewpoint renderViewpoint(const ExportArgs& args) {
   return v;
 }
 
+// One topic per object a change set names, in the order first named: what changed (moves with
+// their translation, hiding, colour), its comments, and a viewpoint on the object at its new
+// place, selected, with a snapshot drawn with the changes applied.
+std::vector<bcf::Topic> changeTopics(const ExportArgs& args, const ChangeSet& changes) {
+  int width = 0, height = 0;
+  parseImageSize(args.size, "--size", width, height);
+  EglContext context;
+  WalkthroughOptions options;
+  options.width = width;
+  options.height = height;
+  Walkthrough walk(args.package, options);
+  const PackageView& view = walk.package();
+  applyChangeStates(changes, view, walk.objectStates());
+  walk.setMovedObjects(movedMeshes(changes, view));
+  const ComponentIndex index(view);
+  std::vector<std::string> keys;
+  for (const Change& c : changes.changes())
+    if (std::find(keys.begin(), keys.end(), c.key) == keys.end()) keys.push_back(c.key);
+  std::vector<bcf::Topic> topics;
+  for (const std::string& key : keys) {
+    bcf::Topic topic;
+    topic.guid = bcf::newGuid();
+    topic.type = "Change";
+    topic.status = "Open";
+    std::string what;
+    for (const Change& c : changes.changes()) {
+      if (c.key != key) continue;
+      if (topic.creation_date.empty()) {
+        topic.creation_date = c.date.empty() ? bcf::utcNow() : c.date;
+        topic.creation_author = c.author.empty() ? defaultAuthor() : c.author;
+      }
+      char line[256];
+      if (c.kind == Change::Kind::Move) {
+        const glm::dvec3 t = c.new_pivot - c.old_pivot;
+        std::snprintf(line, sizeof line, "moved by (%.3f, %.3f, %.3f) m, centre (%.3f, %.3f, %.3f) to (%.3f, %.3f, %.3f)",
+                      t.x, t.y, t.z, c.old_pivot.x, c.old_pivot.y, c.old_pivot.z, c.new_pivot.x,
+                      c.new_pivot.y, c.new_pivot.z);
+        what += std::string(what.empty() ? "" : "; ") + line;
+      } else if (c.kind == Change::Kind::Hide) {
+        what += std::string(what.empty() ? "" : "; ") + (c.hidden ? "hidden" : "shown");
+      } else if (c.kind == Change::Kind::Colour) {
+        std::snprintf(line, sizeof line, "recoloured %08X (ABGR)", c.rgba);
+        what += std::string(what.empty() ? "" : "; ") + line;
+      } else {
+        topic.comments.push_back({bcf::newGuid(), c.date.empty() ? bcf::utcNow() : c.date,
+                                  c.author.empty() ? defaultAuthor() : c.author, c.text, "", "", ""});
+      }
+    }
+    topic.title = (what.rfind("moved", 0) == 0 ? "Moved " : "Changed ") + key;
+    topic.description = what.empty() ? "comments on " + key : key + ": " + what;
+
+    // The camera frames the object where it stands now, from the south-west and above.
+    const std::vector<uint32_t> objects = objectsOfChangeKey(view, key);
+    glm::dvec3 lo, hi;
+    Camera camera;
+    if (!movedBounds(view, objects, changes.placement(key), lo, hi))
+      throw std::runtime_error(args.changes + ": '" + key + "' has no geometry to look at");
+    const glm::dvec3 centre = 0.5 * (lo + hi);
+    const double radius = std::max(0.5 * glm::length(hi - lo), 0.1);
+    camera.position = centre + glm::normalize(glm::dvec3(-1.0, -1.0, 0.7)) *
+                                   (1.6 * radius / std::tan(0.5 * camera.fov_y_rad));
+    camera.far_m = std::max(100.0, 10.0 * glm::length(walk.worldMax() - walk.worldMin()));
+    camera.lookAt(centre);
+    ObjectStates& states = walk.objectStates();
+    states.setAll(kObjectSelected, false);
+    for (uint32_t o : objects) states.set(o, kObjectSelected, true);
+    walk.renderSettled(camera);
+    std::vector<uint8_t> rgba;
+    walk.renderer().readColor(rgba, true);
+    bcf::Viewpoint v = captureViewpoint(camera, double(width) / height, states, index, {});
+    v.snapshot_png = encodePngRgba(width, height, rgba);
+    for (bcf::Comment& c : topic.comments) c.viewpoint_guid = v.guid;
+    topic.viewpoints.push_back(std::move(v));
+    topics.push_back(std::move(topic));
+  }
+  return topics;
+}
+
 void runExport(const ExportArgs& args) {
   const bcf::Version version = args.version == "2.1" ? bcf::Version::V2_1 : bcf::Version::V3_0;
   if (args.title.empty() && (!args.comments.empty() || !args.eye.empty() || !args.viewpoint.empty()))
@@ -303,6 +385,12 @@ void runExport(const ExportArgs& args) {
       topic.comments.push_back({bcf::newGuid(), topic.creation_date, topic.creation_author, text,
                                 topic.viewpoints.front().guid, "", ""});
     review.topics.push_back(std::move(topic));
+    writeReviewArchive(store, review);
+  }
+  if (!args.changes.empty()) {
+    const ChangeSet changes = readChangeSet(args.changes);
+    if (changes.empty()) throw std::runtime_error(args.changes + ": no changes (or no such file)");
+    for (bcf::Topic& topic : changeTopics(args, changes)) review.topics.push_back(std::move(topic));
     writeReviewArchive(store, review);
   }
   if (review.topics.empty())
@@ -357,6 +445,10 @@ void registerBcfCommand(CLI::App& app, const GlobalOptions& global) {
                 "Start from a BCF viewpoint (FILE.bcfzip[#N]): camera, selection, visibility, "
                 "colours, clipping planes");
   e->add_option("--size", ex->size, "Snapshot size WIDTHxHEIGHT")->capture_default_str();
+  e->add_option("--changes", ex->changes,
+                "Add a topic per object a change set (model.changes.json) names: what changed, "
+                "its comments, a viewpoint on it at its new place")
+      ->check(CLI::ExistingFile);
   addReviewStateOptions(*e, ex->state);
   e->callback([ex] { runExport(*ex); });
 }

@@ -269,7 +269,7 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   drawStatsPanel(stats, settings, nav, recording);
   selection.drawPanel(float(window_width) - 8.0f, 8.0f);
   review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
-  edits.drawPanel(float(window_width) - 8.0f, float(window_height) - 280.0f, now_s);
+  edits.drawPanel(now_s);
   edits.drawGizmo(camera, window_width, window_height);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
@@ -397,6 +397,8 @@ void runEditAction(ViewEdits& edits, const ViewEvent& e, const Camera& camera, i
     edits.redo();
   } else if (a == "save-changes") {
     edits.save();
+  } else if (a == "gizmo") {
+    edits.toggleGizmo();
   } else if (a == "drag") {
     double x0, y0, x1, y1;
     if (std::sscanf(e.text.c_str(), "%lf %lf %lf %lf", &x0, &y0, &x1, &y1) != 4) {
@@ -415,7 +417,7 @@ void runEditAction(ViewEdits& edits, const ViewEvent& e, const Camera& camera, i
 
 bool isEditAction(const std::string& a) {
   for (const char* edit : {"move", "rotate", "scale", "explode", "collapse", "hide-selection",
-                           "comment", "undo", "redo", "save-changes", "drag"})
+                           "comment", "undo", "redo", "save-changes", "drag", "gizmo"})
     if (a == edit) return true;
   return false;
 }
@@ -493,6 +495,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     }
     if (keys.pressed(GLFW_KEY_P)) settings.parametric_mode = (settings.parametric_mode + 1) % 3;
     if (keys.pressed(GLFW_KEY_R)) recorder.toggle(args.record_file);
+    if (keys.pressed(GLFW_KEY_G)) edits.toggleGizmo();
     // Esc clears the selection; with nothing selected, it quits.
     auto escape = [&] {
       if (selection.empty()) glfwSetWindowShouldClose(window, GLFW_TRUE);

@@ -348,7 +348,14 @@ ViewEdits::Handle ViewEdits::hit(const Gizmo& g, const Camera& camera, int width
   return {};
 }
 
+void ViewEdits::toggleGizmo() {
+  show_gizmo_ = !show_gizmo_;
+  if (!show_gizmo_) release();
+  say("edits: gizmo %s\n", show_gizmo_ ? "on" : "off");
+}
+
 bool ViewEdits::press(const Camera& camera, int width, int height, double x, double y) {
+  if (!show_gizmo_) return false;
   const auto g = gizmo(camera, height);
   if (!g) return false;
   const Handle h = hit(*g, camera, width, height, x, y);
@@ -403,6 +410,7 @@ void ViewEdits::release() {
 }
 
 void ViewEdits::drawGizmo(const Camera& camera, int width, int height) const {
+  if (!show_gizmo_) return;
   const auto g = gizmo(camera, height);
   if (!g) return;
   ImDrawList* draw = ImGui::GetForegroundDrawList();
@@ -440,11 +448,17 @@ void ViewEdits::drawGizmo(const Camera& camera, int width, int height) const {
   draw->AddCircleFilled(im(*c), 4.0f, IM_COL32(240, 240, 240, 255));
 }
 
-void ViewEdits::drawPanel(float x, float y, double now_s) {
-  ImGui::SetNextWindowPos(ImVec2(x, y), ImGuiCond_FirstUseEver, ImVec2(1.0f, 0.0f));
-  ImGui::Begin("Edit", nullptr, ImGuiWindowFlags_AlwaysAutoResize);
+void ViewEdits::drawPanel(double now_s) {
+  // A section of the review window (ImGui appends to a window begun again by name).
+  ImGui::Begin("Review");
+  if (!ImGui::CollapsingHeader("Edit", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::End();
+    return;
+  }
   ImGui::Text("%zu changes, %zu to redo%s", changes_.undoable(), changes_.redoable(),
               load_error_.empty() ? "" : "  (the change set file could not be read)");
+  if (bool shown = show_gizmo_; ImGui::Checkbox("gizmo [G]", &shown)) toggleGizmo();
+  ImGui::SameLine();
   if (ImGui::Button("Undo")) undo();
   ImGui::SameLine();
   if (ImGui::Button("Redo")) redo();

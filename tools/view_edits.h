@@ -4,7 +4,7 @@
 // opens it); and the exploded view, which pushes the selection's objects away from their common
 // centre, animated, and is undone by collapsing (a view, not an edit: it is not recorded).
 //
-// The gizmo sits on the selection's centre: an arrow per axis (X red, Y green, Z blue) moves
+// The gizmo, switched on with G, sits on the selection's centre: an arrow per axis (X red, Y green, Z blue) moves
 // along it, a square per plane moves in it, a ring per axis rotates about it; moves snap to
 // kMoveStepM, rotations to kRotateStepDeg. It is drawn over the frame with ImGui's foreground
 // list, and it takes the mouse while a handle is dragged (press, drag, release: one change).
@@ -62,9 +62,14 @@ class ViewEdits {
   void dragTo(double x, double y);
   void release();
   bool capturing() const { return drag_.has_value(); }
+  // The gizmo shows (and takes presses) only while it is switched on: the G key, the Edit
+  // section's checkbox, the script's `gizmo`.
+  void toggleGizmo();
+  bool gizmoShown() const { return show_gizmo_; }
   void drawGizmo(const Camera& camera, int width, int height) const;
-  // The "Edit" window: undo, redo, save, explode, the change count.
-  void drawPanel(float x, float y, double now_s);
+  // The "Edit" section of the review window (drawn after it): undo, redo, save, explode, hide,
+  // comment, the change count.
+  void drawPanel(double now_s);
 
  private:
   struct Handle {
@@ -104,6 +109,7 @@ class ViewEdits {
   std::map<std::string, glm::dvec3> explode_offsets_;
   double explode_from_ = 1.0, explode_to_ = 1.0, explode_now_ = 1.0, explode_start_s_ = 0.0;
   std::optional<Drag> drag_;
+  bool show_gizmo_ = false;
   std::vector<uint32_t> hidden_by_edits_;
 };
 

@@ -29,7 +29,7 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
                                           "explode", "comment", "drag"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
-                                             "collapse", "hide-selection"};
+                                             "collapse", "hide-selection", "gizmo"};
   for (const char* a : with_text)
     if (action == a) return takes_text = true;
   for (const char* a : without_text)

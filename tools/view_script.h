@@ -19,7 +19,7 @@
 // and the edits (view_edits.h) of the selection:
 //   FRAME move DX,DY,DZ | rotate DEGREES (about Z) | scale FACTOR | explode FACTOR | collapse
 //   FRAME drag X0 Y0 X1 Y1   a gizmo handle pressed at X0,Y0 and dragged to X1,Y1 (window pixels)
-//   FRAME hide-selection | comment TEXT | undo | redo | save-changes
+//   FRAME gizmo (switches it on or off) | hide-selection | comment TEXT | undo | redo | save-changes
 //
 // Events run after their frame is drawn, in file order.
 #pragma once
