@@ -96,10 +96,8 @@ std::vector<std::string> ViewEdits::selectedKeys() const {
 
 bool ViewEdits::keyCentre(const std::string& key, glm::dvec3& centre) const {
   glm::dvec3 lo, hi;
-  glm::dmat4 place = changes_.placement(key);
-  if (const auto it = explode_offsets_.find(key); it != explode_offsets_.end())
-    place[3] += glm::dvec4((explode_now_ - 1.0) * it->second, 0.0);
-  if (!movedBounds(walk_.package(), objectsOfChangeKey(walk_.package(), key), place, lo, hi)) return false;
+  if (!movedBounds(walk_.package(), objectsOfChangeKey(walk_.package(), key), changes_.placement(key), lo, hi))
+    return false;
   centre = 0.5 * (lo + hi);
   return true;
 }
@@ -228,28 +226,27 @@ bool ViewEdits::save() {
 
 void ViewEdits::explode(double factor, double now_s) {
   if (factor != 1.0) {
-    // The selection's keys, each pushed from the common centre along its own offset.
-    explode_keys_ = selectedKeys();
+    // Each selected object pushed from the selection's common centre along its own offset.
+    const PackageView& view = walk_.package();
     explode_offsets_.clear();
-    const double saved_now = explode_now_;
-    explode_now_ = 1.0;
+    std::vector<std::pair<uint32_t, glm::dvec3>> centres;
     glm::dvec3 common(0.0);
-    std::vector<glm::dvec3> centres;
-    for (const std::string& key : explode_keys_) {
-      glm::dvec3 c(0.0);
-      keyCentre(key, c);
-      centres.push_back(c);
-      common += c;
+    for (uint32_t o : selection_.selected()) {
+      std::string key(view.objectDbKey(o));
+      if (key.empty()) key = std::string(view.objectName(o));
+      glm::dvec3 lo, hi;
+      if (!movedBounds(view, {o}, changes_.placement(key), lo, hi)) continue;
+      centres.emplace_back(o, 0.5 * (lo + hi));
+      common += 0.5 * (lo + hi);
     }
-    explode_now_ = saved_now;
     if (centres.empty()) return;
     common /= double(centres.size());
-    for (size_t k = 0; k < explode_keys_.size(); ++k) explode_offsets_[explode_keys_[k]] = centres[k] - common;
+    for (const auto& [o, c] : centres) explode_offsets_[o] = c - common;
   }
   explode_from_ = explode_now_;
   explode_to_ = factor;
   explode_start_s_ = now_s;
-  say("edits: explode to %.2f over %zu objects\n", factor, explode_keys_.size());
+  say("edits: explode to %.2f over %zu objects\n", factor, explode_offsets_.size());
 }
 
 void ViewEdits::update(double now_s) {
@@ -257,31 +254,33 @@ void ViewEdits::update(double now_s) {
   const double s = std::clamp((now_s - explode_start_s_) / kExplodeSeconds, 0.0, 1.0);
   const double eased = s * s * (3.0 - 2.0 * s);
   explode_now_ = s >= 1.0 ? explode_to_ : explode_from_ + (explode_to_ - explode_from_) * eased;
-  if (explode_now_ == 1.0 && explode_to_ == 1.0) {
-    explode_keys_.clear();
-    explode_offsets_.clear();
-  }
+  if (explode_now_ == 1.0 && explode_to_ == 1.0) explode_offsets_.clear();
   refresh();
 }
 
 void ViewEdits::refresh() {
   const PackageView& view = walk_.package();
-  std::vector<std::string> keys = changes_.movedKeys();
-  for (const std::string& key : explode_keys_)
-    if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
-  std::vector<MovedMesh> meshes;
-  for (const std::string& key : keys) {
-    glm::dmat4 place = changes_.placement(key);
-    if (const auto it = explode_offsets_.find(key); it != explode_offsets_.end())
-      place[3] += glm::dvec4((explode_now_ - 1.0) * it->second, 0.0);
-    if (place == glm::dmat4(1.0)) continue;  // where it stands: the clusters draw it
-    auto cached = geometry_.find(key);
-    if (cached == geometry_.end())
-      cached = geometry_.emplace(key, objectMeshes(view, objectsOfChangeKey(view, key))).first;
-    for (MovedMesh mesh : cached->second) {
-      mesh.move = packageMove(view, place);
-      meshes.push_back(std::move(mesh));
+  // Each object's placement: its key's moves, then its explode offset.
+  std::map<uint32_t, glm::dmat4> places;
+  for (const std::string& key : changes_.movedKeys())
+    for (uint32_t o : objectsOfChangeKey(view, key)) places[o] = changes_.placement(key);
+  for (const auto& [o, offset] : explode_offsets_) {
+    auto [it, added] = places.emplace(o, glm::dmat4(1.0));
+    if (added) {
+      std::string key(view.objectDbKey(o));
+      if (key.empty()) key = std::string(view.objectName(o));
+      it->second = changes_.placement(key);
     }
+    it->second[3] += glm::dvec4((explode_now_ - 1.0) * offset, 0.0);
+  }
+  std::vector<MovedMesh> meshes;
+  for (const auto& [o, place] : places) {
+    if (place == glm::dmat4(1.0)) continue;  // where it stands: the clusters draw it
+    auto cached = geometry_.find(o);
+    if (cached == geometry_.end()) cached = geometry_.emplace(o, objectMeshes(view, {o}).front()).first;
+    MovedMesh mesh = cached->second;
+    mesh.move = packageMove(view, place);
+    meshes.push_back(std::move(mesh));
   }
   walk_.setMovedObjects(std::move(meshes));
   // Hidden by edits: what the change set hides now, and no more than that.

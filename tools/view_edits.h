@@ -1,8 +1,8 @@
 // The viewer's edits: moving, rotating and scaling the selection with a gizmo, hiding and
 // colouring it and commenting on it, each step recorded in the change set (change_set.h) with
 // undo and redo and saved next to the package (model.changes.json, reloaded when the viewer
-// opens it); and the exploded view, which pushes the selection's objects away from their common
-// centre, animated, and is undone by collapsing (a view, not an edit: it is not recorded).
+// opens it); and the exploded view, which pushes each selected object away from the selection's
+// common centre, animated, and is undone by collapsing (a view, not an edit: it is not recorded).
 //
 // The gizmo, switched on with G, sits on the selection's centre: an arrow per axis (X red, Y green, Z blue) moves
 // along it, a square per plane moves in it, a ring per axis rotates about it; moves snap to
@@ -103,10 +103,9 @@ class ViewEdits {
   std::string author_;
   ChangeSet changes_;
   std::string load_error_;
-  std::map<std::string, std::vector<MovedMesh>> geometry_;  // by key, moves unset
-  // Explode: the keys, their offsets from the common centre at factor 2, the animation.
-  std::vector<std::string> explode_keys_;
-  std::map<std::string, glm::dvec3> explode_offsets_;
+  std::map<uint32_t, MovedMesh> geometry_;  // by object, move unset
+  // Explode: each object's offset from the common centre (pushed to factor times it), animated.
+  std::map<uint32_t, glm::dvec3> explode_offsets_;
   double explode_from_ = 1.0, explode_to_ = 1.0, explode_now_ = 1.0, explode_start_s_ = 0.0;
   std::optional<Drag> drag_;
   bool show_gizmo_ = false;
