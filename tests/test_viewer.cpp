@@ -437,5 +437,32 @@ TEST(Viewer, ExplodingAndCollapsingGivesTheOriginalFrame) {
   EXPECT_EQ(differing(*collapsed.before, *collapsed.after), 0) << "collapsed, as before";
 }
 
+// Sections in the viewer: a plane placed on the vessel's surface under the window's centre
+// (its normal the surface's, toward the eye) and dragged 0.3 m into it cuts the vessel open; the
+// cut is capped in the section colour on the X screen.
+TEST(Viewer, ASectionPlacedOnASurfaceAndDraggedCutsItOpen) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const ScriptedRun run = runViewerScript(
+      test::generatedPlant().package, dir, "section",
+      "20 search V-1002\n22 select-results\n24 zoom-results\n60 section-at 512 384\n"
+      "62 section-offset -0.3\n150 quit\n",
+      "sections: plane 1 at", "moved -0.300 m");
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  ASSERT_TRUE(run.before && run.after) << run.log;
+  writePngRgba(dir / "x-screen-section.png", run.after->width, run.after->height, run.after->rgba);
+  auto caps = [](const test::ScreenImage& screen) {
+    int n = 0;  // the section colour (gl_shaders.h kSectionCap), right of the review panel
+    for (int y = 0; y < 768; ++y)
+      for (int x = 460; x < 1024; ++x) {
+        const uint8_t* p = screen.at(x, y);
+        n += p[0] == 199 && p[1] == 56 && p[2] == 46;
+      }
+    return n;
+  };
+  EXPECT_EQ(caps(*run.before), 0);
+  EXPECT_GT(caps(*run.after), 500) << "the vessel is cut open and capped";
+}
+
 }  // namespace
 }  // namespace tw

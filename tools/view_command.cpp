@@ -39,7 +39,9 @@
 #include "selection_sets.h"
 #include "change_set.h"
 #include "snapshot_camera.h"
+#include "section_planes.h"
 #include "view_edits.h"
+#include "view_sections.h"
 #include "view_review.h"
 #include "view_script.h"
 #include "view_selection.h"
@@ -261,8 +263,8 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 // (left, below the statistics, as tall as the window allows; it scrolls).
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
-                 ViewEdits& edits, const Camera& camera, double now_s, int window_width,
-                 int window_height) {
+                 ViewEdits& edits, ViewSections& sections, const Camera& camera, double now_s,
+                 int window_width, int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -270,6 +272,7 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   selection.drawPanel(float(window_width) - 8.0f, 8.0f);
   review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
   edits.drawPanel(now_s);
+  sections.drawPanel();
   edits.drawGizmo(camera, window_width, window_height);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
@@ -415,6 +418,36 @@ void runEditAction(ViewEdits& edits, const ViewEvent& e, const Camera& camera, i
   }
 }
 
+// A section action of a script (view_sections.h).
+void runSectionAction(ViewSections& sections, const ViewEvent& e, const Camera& camera,
+                      const std::function<glm::dvec2(double, double)>& toFramebuffer) {
+  const std::string& a = e.action;
+  try {
+    if (a == "section-at") {
+      double x = 0.0, y = 0.0;
+      if (std::sscanf(e.text.c_str(), "%lf %lf", &x, &y) != 2)
+        throw std::invalid_argument("expected X Y, got '" + e.text + "'");
+      const glm::dvec2 p = toFramebuffer(x, y);
+      sections.placeAt(camera, int(p.x), int(p.y));
+    } else if (a == "section") {
+      sections.add(parseSectionPlane(e.text));
+    } else if (a == "section-offset") {
+      sections.offsetLast(std::stod(e.text));
+    } else if (a == "section-box") {
+      sections.boxAroundSelection(0.05);
+    } else if (a == "section-clear") {
+      sections.clear();
+    }
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "terawalk: %s: %s\n", a.c_str(), error.what());
+  }
+}
+
+bool isSectionAction(const std::string& a) {
+  return a == "section-at" || a == "section" || a == "section-offset" || a == "section-box" ||
+         a == "section-clear";
+}
+
 bool isEditAction(const std::string& a) {
   for (const char* edit : {"move", "rotate", "scale", "explode", "collapse", "hide-selection",
                            "comment", "undo", "redo", "save-changes", "drag", "gizmo"})
@@ -471,6 +504,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
                     selectionSetsPathFor(args.file));
   const char* user = std::getenv("USER");
   ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
+  ViewSections sections(walk, selection);
   ClickDetector clicks;
   const std::vector<ViewEvent> script =
       args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
@@ -550,6 +584,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       const int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
       if (px < 0 || py < 0 || px >= walk.renderer().width() || py >= walk.renderer().height())
         return;
+      if (sections.placingOnClick()) {  // the Sections panel's "Plane at click"
+        sections.placeAt(camera, px, py);
+        return;
+      }
       selection.click(pickPixel(walk.renderer(), camera, px, py), ctrl);
       if (twice) frameSelection(selection, camera, nav);
     };
@@ -563,7 +601,9 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
         case ViewEvent::Kind::Review:
-          if (isEditAction(e.action))
+          if (isSectionAction(e.action))
+            runSectionAction(sections, e, camera, toFramebuffer);
+          else if (isEditAction(e.action))
             runEditAction(edits, e, camera, fb_w, fb_h, t, toFramebuffer);
           else
             runReviewAction(review, e);
@@ -585,7 +625,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       saveScreenshot(walk.renderer(), name);
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
-    drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, camera, t, fb_w, fb_h);
+    drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, camera, t,
+                fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

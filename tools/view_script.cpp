@@ -26,10 +26,12 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
   static const char* const with_text[] = {"hide-layer", "show-layer", "isolate-layer",
                                           "xray-others", "search", "query", "save-selection",
                                           "save-visibility", "restore", "move", "rotate", "scale",
-                                          "explode", "comment", "drag"};
+                                          "explode", "comment", "drag", "section-at", "section",
+                                          "section-offset"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
-                                             "collapse", "hide-selection", "gizmo"};
+                                             "collapse", "hide-selection", "gizmo", "section-box",
+                                             "section-clear"};
   for (const char* a : with_text)
     if (action == a) return takes_text = true;
   for (const char* a : without_text)

@@ -20,6 +20,9 @@
 //   FRAME move DX,DY,DZ | rotate DEGREES (about Z) | scale FACTOR | explode FACTOR | collapse
 //   FRAME drag X0 Y0 X1 Y1   a gizmo handle pressed at X0,Y0 and dragged to X1,Y1 (window pixels)
 //   FRAME gizmo (switches it on or off) | hide-selection | comment TEXT | undo | redo | save-changes
+// and the section planes (view_sections.h):
+//   FRAME section-at X Y     a plane on the surface under window pixel X,Y, facing the eye
+//   FRAME section X,Y,Z,NX,NY,NZ | section-offset METRES | section-box | section-clear
 //
 // Events run after their frame is drawn, in file order.
 #pragma once
