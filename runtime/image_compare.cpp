@@ -184,9 +184,14 @@ RgbaImage readPngRgba(const std::filesystem::path& path) {
     if (!in || !in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size())))
       throw FormatError(name, "cannot read");
   }
+  return decodePngRgba(bytes, name);
+}
+
+RgbaImage decodePngRgba(std::span<const uint8_t> bytes, const std::string& name) {
   static constexpr uint8_t kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
   if (bytes.size() < sizeof kSignature || std::memcmp(bytes.data(), kSignature, 8) != 0)
     throw FormatError::atByte(name, 0, "not a PNG file (bad signature)");
+  if (bytes.size() > size_t(1) << 30) throw FormatError(name, "too large for a PNG frame");
 
   const int length = static_cast<int>(bytes.size());
   int w = 0, h = 0, channels = 0;

@@ -78,6 +78,9 @@ inline constexpr uint64_t kMaxPngPixels = uint64_t(1) << 26;
 // file for a missing, unreadable, non-PNG, corrupt or oversized file.
 RgbaImage readPngRgba(const std::filesystem::path& path);
 
+// The same from bytes in memory (a BCF snapshot); `name` is what errors call them.
+RgbaImage decodePngRgba(std::span<const uint8_t> bytes, const std::string& name);
+
 // Writes width*height RGBA8 pixels as a PNG. Throws std::runtime_error naming the file when the
 // file cannot be written, std::invalid_argument when rgba has the wrong size.
 void writePngRgba(const std::filesystem::path& path, int width, int height,

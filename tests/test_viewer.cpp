@@ -464,5 +464,53 @@ TEST(Viewer, ASectionPlacedOnASurfaceAndDraggedCutsItOpen) {
   EXPECT_GT(caps(*run.after), 500) << "the vessel is cut open and capped";
 }
 
+// Named viewpoints: a view of the vessel cut open and selected, saved in one session, is a topic
+// of the review's BCF archive (camera, selection, clipping plane, snapshot); a second session
+// that goes to it shows the cut and the outline again.
+TEST(Viewer, ANamedViewpointIsSavedToTheReviewAndRestoredInTheNextSession) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  const ScriptedRun first = runViewerScript(
+      package, dir, "save",
+      "20 search V-1002\n22 select-results\n24 zoom-results\n60 section-at 512 384\n"
+      "62 section-offset -0.3\n80 save-viewpoint vessel cut\n150 quit\n",
+      "sections: plane 1 at", "viewpoints: saved");
+  ASSERT_EQ(first.exit_code, 0) << first.log;
+  const nlohmann::json list = nlohmann::json::parse([&] {
+    const test::CommandResult r = test::runTerawalk("bcf list --json " + (dir / "plant.review.bcfzip").string());
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.output.substr(r.output.find('{'));
+  }());
+  ASSERT_EQ(list["topics"].size(), 1u);
+  EXPECT_EQ(list["topics"][0]["title"], "vessel cut");
+  const auto& v = list["topics"][0]["viewpoints"][0];
+  EXPECT_EQ(v["selection"].size(), 1u) << "the vessel's key";
+  EXPECT_EQ(v["clipping_planes"].size(), 1u);
+  EXPECT_GT(v["snapshot_bytes"].get<size_t>(), 1000u);
+
+  const ScriptedRun second = runViewerScript(package, dir, "go",
+                                             "40 go-viewpoint vessel cut\n150 quit\n",
+                                             "viewpoints: went to", "viewpoints: went to");
+  ASSERT_EQ(second.exit_code, 0) << second.log;
+  ASSERT_TRUE(second.before && second.after) << second.log;
+  writePngRgba(dir / "x-screen-viewpoint.png", second.after->width, second.after->height,
+               second.after->rgba);
+  EXPECT_NE(second.log.find("went to 'vessel cut' (11 selected"), std::string::npos) << second.log;
+  auto caps = [](const test::ScreenImage& screen) {
+    int n = 0;
+    for (int y = 0; y < 768; ++y)
+      for (int x = 460; x < 1024; ++x) {
+        const uint8_t* p = screen.at(x, y);
+        n += p[0] == 199 && p[1] == 56 && p[2] == 46;
+      }
+    return n;
+  };
+  EXPECT_EQ(caps(*second.before), 0);
+  EXPECT_GT(caps(*second.after), 500) << "the cut is back";
+  EXPECT_GT(outlinePixels(*second.after, 460, 120, 1024, 768), 20) << "and the selection";
+}
+
 }  // namespace
 }  // namespace tw

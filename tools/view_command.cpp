@@ -42,6 +42,8 @@
 #include "section_planes.h"
 #include "view_edits.h"
 #include "view_sections.h"
+#include "view_viewpoints.h"
+#include "review_archive.h"
 #include "view_review.h"
 #include "view_script.h"
 #include "view_selection.h"
@@ -263,8 +265,8 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 // (left, below the statistics, as tall as the window allows; it scrolls).
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
-                 ViewEdits& edits, ViewSections& sections, const Camera& camera, double now_s,
-                 int window_width, int window_height) {
+                 ViewEdits& edits, ViewSections& sections, ViewViewpoints& viewpoints,
+                 Camera& camera, double now_s, int window_width, int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -273,6 +275,8 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
   edits.drawPanel(now_s);
   sections.drawPanel();
+  const Camera current = camera;
+  viewpoints.drawPanel(camera, current);
   edits.drawGizmo(camera, window_width, window_height);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
@@ -505,6 +509,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   const char* user = std::getenv("USER");
   ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
   ViewSections sections(walk, selection);
+  ViewViewpoints viewpoints(walk, selection, sections, reviewArchivePathFor(args.file),
+                            user && *user ? user : "terawalk");
   ClickDetector clicks;
   const std::vector<ViewEvent> script =
       args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
@@ -601,7 +607,11 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
         case ViewEvent::Kind::Review:
-          if (isSectionAction(e.action))
+          if (e.action == "save-viewpoint")
+            viewpoints.save(e.text, camera);
+          else if (e.action == "go-viewpoint")
+            viewpoints.go(e.text, camera);
+          else if (isSectionAction(e.action))
             runSectionAction(sections, e, camera, toFramebuffer);
           else if (isEditAction(e.action))
             runEditAction(edits, e, camera, fb_w, fb_h, t, toFramebuffer);
@@ -625,8 +635,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       saveScreenshot(walk.renderer(), name);
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
-    drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, camera, t,
-                fb_w, fb_h);
+    drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, viewpoints,
+                camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

@@ -27,7 +27,7 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
                                           "xray-others", "search", "query", "save-selection",
                                           "save-visibility", "restore", "move", "rotate", "scale",
                                           "explode", "comment", "drag", "section-at", "section",
-                                          "section-offset"};
+                                          "section-offset", "save-viewpoint", "go-viewpoint"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
                                              "collapse", "hide-selection", "gizmo", "section-box",

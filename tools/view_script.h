@@ -23,6 +23,8 @@
 // and the section planes (view_sections.h):
 //   FRAME section-at X Y     a plane on the surface under window pixel X,Y, facing the eye
 //   FRAME section X,Y,Z,NX,NY,NZ | section-offset METRES | section-box | section-clear
+// and the named viewpoints (view_viewpoints.h):
+//   FRAME save-viewpoint NAME | go-viewpoint NAME
 //
 // Events run after their frame is drawn, in file order.
 #pragma once
