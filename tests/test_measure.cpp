@@ -12,6 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include "closest_points.h"
+#include "object_distance.h"
+#include "object_queries.h"
+#include "package_view.h"
+#include "point_snap.h"
 #include "scene.h"
 #include "test_support.h"
 #include "tws_writer.h"
@@ -147,6 +151,39 @@ TEST(Measure, DistancesBetweenBoxesPipesAndAPlateAreExact) {
                                          " --between box-a pipe-a --centre-lines");
   EXPECT_EQ(no_axis.exit_code, 1);
   EXPECT_NE(no_axis.output.find("no cylinder"), std::string::npos) << no_axis.output;
+}
+
+// Snapping: a point picked near a box's corner lands on the corner, near an edge on the edge (and
+// never on the diagonal of a face's two triangles), on a face stays; near a pipe's end, on its
+// axis's end centre.
+TEST(Measure, PickedPointsSnapToVerticesEdgesAndAxisEnds) {
+  const auto dir = test::scratchDir();
+  const auto scene = dir / "snap.tws", package = dir / "snap.twk";
+  {
+    TwsWriter writer(scene);
+    writer.onLayer(0, {"equipment", 0xff808080u});
+    writer.onObject(boxObject(0, "box", {0, 0, 0}, {1, 1, 1}));
+    writer.onObject(pipeObject(1, "pipe", {0, 3, 0.5}, 2.0f, 0.125f));
+    writer.finish();
+  }
+  ASSERT_EQ(test::runTerawalk("-q preprocess " + scene.string() + " -o " + package.string()).exit_code, 0);
+  const PackageView view = PackageView::open(package);
+  const double tolerance = 1e-5;  // the package's position grid and the tessellation, well inside
+  const MeasureShape box = measureShape(view, objectsWithKeys(view, {"box"}), 1e-4);
+  const MeasureShape pipe = measureShape(view, objectsWithKeys(view, {"pipe"}), 1e-4);
+
+  const SnappedPoint corner = snapPoint(view, box, {0.98, 0.97, 1.0}, 0.05);
+  EXPECT_EQ(corner.kind, SnappedPoint::Kind::Vertex);
+  EXPECT_LE(glm::length(corner.world - glm::dvec3(1, 1, 1)), tolerance);
+  const SnappedPoint edge = snapPoint(view, box, {0.5, 0.02, 1.0}, 0.05);
+  EXPECT_EQ(edge.kind, SnappedPoint::Kind::Edge);
+  EXPECT_LE(glm::length(edge.world - glm::dvec3(0.5, 0.0, 1.0)), tolerance);
+  const SnappedPoint diagonal = snapPoint(view, box, {0.51, 0.49, 1.0}, 0.05);
+  EXPECT_EQ(diagonal.kind, SnappedPoint::Kind::Surface) << "a face's diagonal is no edge";
+  EXPECT_EQ(diagonal.world, glm::dvec3(0.51, 0.49, 1.0));
+  const SnappedPoint end = snapPoint(view, pipe, {0.0, 3.05, 0.48}, 0.1);
+  EXPECT_EQ(end.kind, SnappedPoint::Kind::AxisEnd);
+  EXPECT_LE(glm::length(end.world - glm::dvec3(0.0, 3.0, 0.5)), tolerance);
 }
 
 }  // namespace

@@ -512,5 +512,37 @@ TEST(Viewer, ANamedViewpointIsSavedToTheReviewAndRestoredInTheNextSession) {
   EXPECT_GT(outlinePixels(*second.after, 460, 120, 1024, 768), 20) << "and the selection";
 }
 
+// Measuring in the viewer: the minimum distance between the two selected pumps is the one
+// `terawalk measure --between` gives, and its closest points are drawn on the X screen; two
+// clicked points give a distance with its X, Y, Z parts, each point snapped.
+TEST(Viewer, MeasuringBetweenTwoPumpsMatchesTheCommandAndDrawsTheClosestPoints) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const ScriptedRun run = runViewerScript(
+      test::generatedPlant().package, dir, "measure",
+      "20 search P-1001\n22 select-results\n24 zoom-results\n40 measure-between\n"
+      "100 measure-at 512 384\n102 measure-at 540 400\n150 quit\n",
+      "measure: between", "measure: between");
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  ASSERT_TRUE(run.before && run.after) << run.log;
+  const test::CommandResult cli = test::runTerawalk(
+      "measure " + test::generatedPlant().package.string() + " --between P-1001-A P-1001-B --json");
+  ASSERT_EQ(cli.exit_code, 0) << cli.output;
+  const double expected = nlohmann::json::parse(cli.output)["distance_m"].get<double>();
+  const size_t at = run.log.find("measure: between P-1001-A to P-1001-B: ");
+  ASSERT_NE(at, std::string::npos) << run.log;
+  const double shown = std::stod(run.log.substr(at + 39));
+  EXPECT_NEAR(shown, expected, 1e-6);
+  int magenta = 0;
+  for (int y = 0; y < 768; ++y)
+    for (int x = 460; x < 1024; ++x) {
+      const uint8_t* p = run.after->at(x, y);
+      magenta += p[0] == 255 && p[1] == 0 && p[2] == 255;
+    }
+  EXPECT_GT(magenta, 20) << "the closest points and the line between them";
+  EXPECT_NE(run.log.find("measure: point 2 ("), std::string::npos) << run.log;
+  EXPECT_NE(run.log.find("measure: distance "), std::string::npos) << run.log;
+}
+
 }  // namespace
 }  // namespace tw

@@ -41,6 +41,7 @@
 #include "snapshot_camera.h"
 #include "section_planes.h"
 #include "view_edits.h"
+#include "view_measure.h"
 #include "view_sections.h"
 #include "view_viewpoints.h"
 #include "review_archive.h"
@@ -266,7 +267,8 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
                  ViewEdits& edits, ViewSections& sections, ViewViewpoints& viewpoints,
-                 Camera& camera, double now_s, int window_width, int window_height) {
+                 ViewMeasure& measure, Camera& camera, double now_s, int window_width,
+                 int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -275,6 +277,8 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   review.drawPanel(8.0f, 200.0f, std::max(200.0f, float(window_height) - 208.0f));
   edits.drawPanel(now_s);
   sections.drawPanel();
+  measure.drawPanel();
+  measure.draw(camera, window_width, window_height);
   const Camera current = camera;
   viewpoints.drawPanel(camera, current);
   edits.drawGizmo(camera, window_width, window_height);
@@ -509,6 +513,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   const char* user = std::getenv("USER");
   ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
   ViewSections sections(walk, selection);
+  ViewMeasure measure(walk, selection);
   ViewViewpoints viewpoints(walk, selection, sections, reviewArchivePathFor(args.file),
                             user && *user ? user : "terawalk");
   ClickDetector clicks;
@@ -536,6 +541,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     if (keys.pressed(GLFW_KEY_P)) settings.parametric_mode = (settings.parametric_mode + 1) % 3;
     if (keys.pressed(GLFW_KEY_R)) recorder.toggle(args.record_file);
     if (keys.pressed(GLFW_KEY_G)) edits.toggleGizmo();
+    if (keys.pressed(GLFW_KEY_M)) measure.toggle();
     // Esc clears the selection; with nothing selected, it quits.
     auto escape = [&] {
       if (selection.empty()) glfwSetWindowShouldClose(window, GLFW_TRUE);
@@ -590,6 +596,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       const int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
       if (px < 0 || py < 0 || px >= walk.renderer().width() || py >= walk.renderer().height())
         return;
+      if (measure.on()) {  // M: clicks place measure points
+        measure.addPoint(camera, px, py);
+        return;
+      }
       if (sections.placingOnClick()) {  // the Sections panel's "Plane at click"
         sections.placeAt(camera, px, py);
         return;
@@ -607,7 +617,19 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
         case ViewEvent::Kind::Review:
-          if (e.action == "save-viewpoint")
+          if (e.action == "measure-at") {
+            double x = 0.0, y = 0.0;
+            if (std::sscanf(e.text.c_str(), "%lf %lf", &x, &y) == 2) {
+              const glm::dvec2 p = toFramebuffer(x, y);
+              measure.addPoint(camera, int(p.x), int(p.y));
+            }
+          } else if (e.action == "measure-between")
+            measure.between(false);
+          else if (e.action == "measure-centre-lines")
+            measure.between(true);
+          else if (e.action == "measure-clear")
+            measure.clear();
+          else if (e.action == "save-viewpoint")
             viewpoints.save(e.text, camera);
           else if (e.action == "go-viewpoint")
             viewpoints.go(e.text, camera);
@@ -636,7 +658,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
     drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, viewpoints,
-                camera, t, fb_w, fb_h);
+                measure, camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

@@ -27,11 +27,13 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
                                           "xray-others", "search", "query", "save-selection",
                                           "save-visibility", "restore", "move", "rotate", "scale",
                                           "explode", "comment", "drag", "section-at", "section",
-                                          "section-offset", "save-viewpoint", "go-viewpoint"};
+                                          "section-offset", "save-viewpoint", "go-viewpoint",
+                                          "measure-at"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
                                              "collapse", "hide-selection", "gizmo", "section-box",
-                                             "section-clear"};
+                                             "section-clear", "measure-between",
+                                             "measure-centre-lines", "measure-clear"};
   for (const char* a : with_text)
     if (action == a) return takes_text = true;
   for (const char* a : without_text)
