@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "camera.h"
@@ -205,6 +206,37 @@ TEST(ChangeSet, AMovedObjectIsDrawnAtItsNewPlaceAndNotItsOldOneAtEveryLevel) {
       EXPECT_EQ(elsewhere, 0u);
     }
   }
+}
+
+// A moved object measures where it was moved: `measure --changes` between the two pumps of a
+// pair, one moved 0.5 m farther from the other, gives the distance 0.5 m longer.
+TEST(ChangeSet, AMovedObjectMeasuresAtItsNewPlace) {
+  const fs::path dir = test::scratchDir();
+  const std::string package = test::generatedPlant().package.string();
+  auto distance = [&](const std::string& extra) {
+    const test::CommandResult r =
+        test::runTerawalk("measure " + package + " --between P-1001-A P-1001-B --json" + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return r.exit_code == 0 ? nlohmann::json::parse(r.output)["distance_m"].get<double>() : -1.0;
+  };
+  const PackageView view = PackageView::open(test::generatedPlant().package);
+  glm::dvec3 a_lo, a_hi, b_lo, b_hi;
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {"P-1001-A"}), a_lo, a_hi));
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {"P-1001-B"}), b_lo, b_hi));
+  const glm::dvec3 away = glm::normalize(0.5 * (b_lo + b_hi) - 0.5 * (a_lo + a_hi));
+  // The pumps stand side by side along one axis: away along it.
+  glm::dvec3 axis(0.0);
+  const int i = std::abs(away.x) > std::abs(away.y) ? 0 : 1;
+  axis[i] = away[i] > 0 ? 1.0 : -1.0;
+  ChangeSet set;
+  Change move = makeChange(Change::Kind::Move, "P-1001-B", "test", "2026-12-06T00:00:00Z");
+  move.old_pivot = 0.5 * (b_lo + b_hi);
+  move.new_pivot = move.old_pivot + 0.5 * axis;
+  move.transform = moveTransform(move.old_pivot, 0.5 * axis);
+  set.add(move);
+  writeChangeSet(dir / "c.json", set);
+  const double before = distance(""), after = distance(" --changes " + (dir / "c.json").string());
+  EXPECT_NEAR(after - before, 0.5, 1e-6) << before << " then " << after;
 }
 
 TEST(ChangeSet, ApplyingAMoveToTheScenePutsThePumpAtItsNewPlaceInTheNewPackage) {

@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "change_set_view.h"
 #include "command.h"
 #include "object_distance.h"
 #include "object_queries.h"
@@ -23,6 +24,7 @@ struct MeasureArgs {
   std::string file;
   std::vector<std::string> between, points, angle;
   bool centre_lines = false;
+  std::string changes;  // a change set: moved objects measured where they were moved
   double tolerance_m = 0.0;
   bool json = false;
 };
@@ -53,8 +55,11 @@ nlohmann::json measureBetween(const MeasureArgs& args) {
                                                  h.bounds_max[1] - h.bounds_min[1],
                                                  h.bounds_max[2] - h.bounds_min[2]));
   const double tolerance = args.tolerance_m > 0.0 ? args.tolerance_m : std::max(1e-6, 1e-6 * diagonal);
-  const MeasureShape shape_a = measureShape(view, a, tolerance);
-  const MeasureShape shape_b = measureShape(view, b, tolerance);
+  const ChangeSet changes = args.changes.empty() ? ChangeSet() : readChangeSet(args.changes);
+  const MeasureShape shape_a =
+      movedShape(view, measureShape(view, a, tolerance), changes.placement(args.between[0]));
+  const MeasureShape shape_b =
+      movedShape(view, measureShape(view, b, tolerance), changes.placement(args.between[1]));
   const MeasuredDistance d = args.centre_lines ? centreLineDistance(view, shape_a, shape_b)
                                                : minimumDistance(view, shape_a, shape_b);
   const glm::dvec3 delta = d.points.b - d.points.a;
@@ -134,6 +139,10 @@ void registerMeasureCommand(CLI::App& app, const GlobalOptions&) {
   cmd->add_option("--tolerance", args->tolerance_m,
                   "Metres: how far inside their surfaces parametrics are tessellated for "
                   "measuring (default a millionth of the model's size, at least 1 um)");
+  cmd->add_option("--changes", args->changes,
+                  "With --between: a review's change set (model.changes.json); moved objects are "
+                  "measured where they were moved")
+      ->check(CLI::ExistingFile);
   cmd->add_flag("--json", args->json, "Print JSON");
   cmd->callback([args] { runMeasure(*args); });
 }

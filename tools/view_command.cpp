@@ -513,7 +513,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   const char* user = std::getenv("USER");
   ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
   ViewSections sections(walk, selection);
-  ViewMeasure measure(walk, selection);
+  ViewMeasure measure(walk, selection, [&edits](const std::string& key) { return edits.placement(key); });
   ViewViewpoints viewpoints(walk, selection, sections, reviewArchivePathFor(args.file),
                             user && *user ? user : "terawalk");
   ClickDetector clicks;

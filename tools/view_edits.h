@@ -46,6 +46,8 @@ class ViewEdits {
   bool redo();
   bool save();  // false (and a message) when the file could not be read at start or written
   const ChangeSet& changes() const { return changes_; }
+  // The world move of a key by the edits (identity when unmoved; the exploded view aside).
+  glm::dmat4 placement(const std::string& key) const { return changes_.placement(key); }
 
   // The exploded view of the selection: factor 1 is where things stand; animated over
   // kExplodeSeconds from the current factor.

@@ -9,6 +9,7 @@
 
 #include <imgui.h>
 
+#include "change_set_view.h"
 #include "object_distance.h"
 #include "object_pick.h"
 #include "object_queries.h"
@@ -37,8 +38,14 @@ std::optional<ImVec2> screen(const Camera& camera, int width, int height, const 
 
 }  // namespace
 
-ViewMeasure::ViewMeasure(Walkthrough& walk, const ViewSelection& selection)
-    : walk_(walk), selection_(selection) {}
+ViewMeasure::ViewMeasure(Walkthrough& walk, const ViewSelection& selection,
+                         std::function<glm::dmat4(const std::string&)> placement)
+    : walk_(walk), selection_(selection), placement_(std::move(placement)) {}
+
+std::string ViewMeasure::keyOf(uint32_t object) const {
+  const PackageView& view = walk_.package();
+  return std::string(view.objectDbKey(object).empty() ? view.objectName(object) : view.objectDbKey(object));
+}
 
 void ViewMeasure::toggle() {
   on_ = !on_;
@@ -58,7 +65,9 @@ bool ViewMeasure::addPoint(const Camera& camera, int x, int y) {
   // Ten pixels at the point's distance, in metres.
   const double radius = kSnapPx * pick->distance_m * 2.0 * std::tan(0.5 * camera.fov_y_rad) / r.height();
   const uint32_t object[] = {pick->object};
-  const MeasureShape shape = measureShape(walk_.package(), object, std::max(1e-4, radius * 0.1));
+  const MeasureShape shape = movedShape(walk_.package(),
+                                        measureShape(walk_.package(), object, std::max(1e-4, radius * 0.1)),
+                                        placement_(keyOf(pick->object)));
   const SnappedPoint p = snapPoint(walk_.package(), shape, pick->world, radius);
   points_.push_back(p);
   say("measure: point %zu (%s) at (%.4f, %.4f, %.4f)\n", points_.size(), snapKindName(p.kind),
@@ -85,7 +94,7 @@ bool ViewMeasure::between(bool centre_lines) {
   const PackageView& view = walk_.package();
   std::vector<std::string> keys;
   for (uint32_t o : selection_.selected()) {
-    const std::string key(view.objectDbKey(o).empty() ? view.objectName(o) : view.objectDbKey(o));
+    const std::string key = keyOf(o);
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
   }
   if (keys.size() != 2) {
@@ -105,8 +114,8 @@ bool ViewMeasure::between(bool centre_lines) {
                                                  h.bounds_max[2] - h.bounds_min[2]));
   const double tolerance = std::max(1e-6, 1e-6 * diagonal);  // as `terawalk measure`
   try {
-    const MeasureShape a = measureShape(view, objectsOf(keys[0]), tolerance);
-    const MeasureShape b = measureShape(view, objectsOf(keys[1]), tolerance);
+    const MeasureShape a = movedShape(view, measureShape(view, objectsOf(keys[0]), tolerance), placement_(keys[0]));
+    const MeasureShape b = movedShape(view, measureShape(view, objectsOf(keys[1]), tolerance), placement_(keys[1]));
     const MeasuredDistance d = centre_lines ? centreLineDistance(view, a, b) : minimumDistance(view, a, b);
     closest_ = std::make_pair(d.points.a, d.points.b);
     points_.clear();

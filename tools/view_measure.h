@@ -7,6 +7,7 @@
 // measure-between, measure-clear.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,7 +23,10 @@ namespace tw {
 
 class ViewMeasure {
  public:
-  ViewMeasure(Walkthrough& walk, const ViewSelection& selection);
+  // `placement`: the world move of a database key (the viewer's edits; identity when unmoved),
+  // so moved objects are measured where they are drawn.
+  ViewMeasure(Walkthrough& walk, const ViewSelection& selection,
+              std::function<glm::dmat4(const std::string&)> placement);
 
   void toggle();
   bool on() const { return on_; }
@@ -38,8 +42,11 @@ class ViewMeasure {
   void drawPanel();
 
  private:
+  std::string keyOf(uint32_t object) const;
+
   Walkthrough& walk_;
   const ViewSelection& selection_;
+  std::function<glm::dmat4(const std::string&)> placement_;
   bool on_ = false;
   std::vector<SnappedPoint> points_;
   std::optional<std::pair<glm::dvec3, glm::dvec3>> closest_;

@@ -2,6 +2,7 @@
 #include "change_set_view.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -72,6 +73,23 @@ void applyChangeStates(const ChangeSet& changes, const PackageView& view, Object
     else if (c.kind == Change::Kind::Colour)
       for (uint32_t o : requireObjects(view, c.key)) states.setColor(o, c.rgba);
   }
+}
+
+MeasureShape movedShape(const PackageView& view, const MeasureShape& shape, const glm::dmat4& world) {
+  if (world == glm::dmat4(1.0)) return shape;
+  const glm::dmat4 m = packageMove(view, world);
+  auto at = [&](const glm::dvec3& p) { return glm::dvec3(m * glm::dvec4(p, 1.0)); };
+  MeasureShape out = shape;
+  for (Triangle3d& t : out.triangles)
+    for (glm::dvec3& p : t) p = at(p);
+  // A cylinder stays one under a rigid move and a uniform scale (its radius scaled with it).
+  const double scale = std::cbrt(std::abs(glm::determinant(glm::dmat3(m))));
+  for (CylinderAxis& c : out.cylinders) {
+    c.base = at(c.base);
+    c.top = at(c.top);
+    c.radius *= scale;
+  }
+  return out;
 }
 
 bool movedBounds(const PackageView& view, const std::vector<uint32_t>& objects,

@@ -8,6 +8,7 @@
 
 #include "change_set.h"
 #include "moved_objects_pass.h"
+#include "object_distance.h"
 #include "object_states.h"
 #include "package_view.h"
 
@@ -30,6 +31,10 @@ std::vector<MovedMesh> movedMeshes(const ChangeSet& changes, const PackageView& 
 
 // Hides and colours of `changes` set on `states` (later changes win). Throws as movedMeshes.
 void applyChangeStates(const ChangeSet& changes, const PackageView& view, ObjectStates& states);
+
+// `shape` (package frame, measureShape) carried through the world move `world`: what a moved
+// object is measured on.
+MeasureShape movedShape(const PackageView& view, const MeasureShape& shape, const glm::dmat4& world);
 
 // The world box of objects' level-0 geometry through a move (for pivots). False when none.
 bool movedBounds(const PackageView& view, const std::vector<uint32_t>& objects,
