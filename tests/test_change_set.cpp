@@ -267,5 +267,60 @@ TEST(ChangeSet, ApplyingAMoveToTheScenePutsThePumpAtItsNewPlaceInTheNewPackage) 
   EXPECT_FALSE(fs::exists(dir / "ghost.tws"));
 }
 
+// For IFC input the moves go back into a copy of the IFC: a wall of bcf-architectural.ifc moved
+// and turned gets a new IfcLocalPlacement, and the copy, imported again, has the wall where the
+// change set put it and every other product where it was.
+TEST(ChangeSet, AnIfcModelGetsItsMovedProductsPlacedAnewInACopy) {
+  const fs::path dir = test::scratchDir();
+  const fs::path ifc = fs::path(TW_SHARED_DATA_DIR) / "bcf-architectural.ifc";
+  const std::string wall = "1BGpia0iv9cfH1lqT0_P80", other = "1E8YkwPMfB$h99jtn_uAjI";
+  test::CommandResult r = test::runTerawalk("-q preprocess " + ifc.string() + " -o " + (dir / "a.twk").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  glm::dvec3 lo, hi, other_lo, other_hi;
+  {
+    const PackageView view = PackageView::open(dir / "a.twk");
+    ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {wall}), lo, hi));
+    ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {other}), other_lo, other_hi));
+  }
+  // Turned 90 degrees about Z around its centre, then moved 0.5 m along X and 0.25 m along Y.
+  const glm::dvec3 centre = 0.5 * (lo + hi), by(0.5, 0.25, 0.0);
+  ChangeSet set;
+  Change move = makeChange(Change::Kind::Move, wall, "test", "2026-12-06T00:00:00Z");
+  move.old_pivot = centre;
+  move.new_pivot = centre + by;
+  move.transform = moveTransform(centre, by, {0, 0, 1}, 0.5 * 3.14159265358979323846);
+  set.add(move);
+  writeChangeSet(dir / "c.json", set);
+  r = test::runTerawalk("changes apply " + ifc.string() + " " + (dir / "c.json").string() + " -o " +
+                        (dir / "moved.ifc").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  EXPECT_NE(r.output.find("1 products placed anew"), std::string::npos) << r.output;
+  r = test::runTerawalk("-q preprocess " + (dir / "moved.ifc").string() + " -o " + (dir / "m.twk").string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
+  const PackageView view = PackageView::open(dir / "m.twk");
+  glm::dvec3 mlo, mhi, olo, ohi;
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {wall}), mlo, mhi));
+  ASSERT_TRUE(objectsBounds(view, objectsWithKeys(view, {other}), olo, ohi));
+  const glm::dvec3 half = 0.5 * (hi - lo);
+  const glm::dvec3 turned(half.y, half.x, half.z);  // X and Y extents swap
+  EXPECT_LE(glm::length(0.5 * (mlo + mhi) - (centre + by)), 1e-4);
+  EXPECT_LE(glm::length(0.5 * (mhi - mlo) - turned), 1e-4);
+  EXPECT_LE(glm::length(olo - other_lo), 1e-4) << "the other wall stays";
+  EXPECT_LE(glm::length(ohi - other_hi), 1e-4);
+
+  // A scale has no IFC placement: refused, naming the product; nothing written.
+  ChangeSet scaled;
+  Change grow = move;
+  grow.transform = moveTransform(centre, glm::dvec3(0.0), {0, 0, 1}, 0.0, 1.5);
+  scaled.add(grow);
+  writeChangeSet(dir / "s.json", scaled);
+  r = test::runTerawalk("changes apply " + ifc.string() + " " + (dir / "s.json").string() + " -o " +
+                        (dir / "scaled.ifc").string());
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.output.find("the move scales it, which an IFC placement cannot say"), std::string::npos)
+      << r.output;
+  EXPECT_FALSE(fs::exists(dir / "scaled.ifc"));
+}
+
 }  // namespace
 }  // namespace tw

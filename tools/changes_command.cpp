@@ -3,6 +3,7 @@
 // names gets the move composed into its placement, exactly (the transform's origin in double,
 // its linear part in the scene's float); a colour change becomes its colour. Hiding and comments
 // have no place in a scene file and are counted, not written.
+#include <cctype>
 #include <cstdio>
 #include <map>
 #include <memory>
@@ -11,6 +12,7 @@
 
 #include "change_set.h"
 #include "command.h"
+#include "ifc_placement_writer.h"
 #include "scene_io.h"
 #include "tws_writer.h"
 #include "up_axis.h"
@@ -75,6 +77,29 @@ class ChangeApplier : public SceneSink {
   std::map<std::string, std::pair<uint32_t, size_t>> colours_;
 };
 
+bool hasExtension(const std::string& path, const char* extension) {
+  std::string e = std::filesystem::path(path).extension().string();
+  for (char& c : e) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return e == extension;
+}
+
+// An IFC scene written back as IFC: the moved products placed anew (ifc_placement_writer.h).
+void applyToIfc(const ApplyArgs& args, const ChangeSet& changes) {
+  std::vector<std::pair<std::string, glm::dmat4>> moves;
+  for (const std::string& key : changes.movedKeys()) moves.emplace_back(key, changes.placement(key));
+  const IfcMoveReport report = writeMovedIfc(args.scene, args.out, moves);
+  if (!report.missing.empty()) {
+    std::filesystem::remove(args.out);
+    throw std::runtime_error(args.changes + ": no product of " + args.scene + " has the GlobalId '" +
+                             report.missing.front() + "'; nothing written");
+  }
+  size_t other = 0;
+  for (const Change& c : changes.changes()) other += c.kind != Change::Kind::Move;
+  std::printf("%s: %zu products placed anew (new absolute IfcLocalPlacements); %zu hide, colour "
+              "and comment changes are review state, not written to the IFC\n",
+              args.out.c_str(), report.moved, other);
+}
+
 void runApply(const ApplyArgs& args) {
   namespace fs = std::filesystem;
   std::error_code ec;
@@ -82,6 +107,7 @@ void runApply(const ApplyArgs& args) {
     throw std::runtime_error("-o " + args.out + " is the scene being read; write to another file");
   const ChangeSet changes = readChangeSet(args.changes);
   if (changes.empty()) throw std::runtime_error(args.changes + ": no changes (or no such file)");
+  if (hasExtension(args.scene, ".ifc") && hasExtension(args.out, ".ifc")) return applyToIfc(args, changes);
   TwsWriter writer(args.out);
   ChangeApplier applier(changes, writer);
   ReadOptions options;
@@ -111,12 +137,13 @@ void registerChangesCommand(CLI::App& app, const GlobalOptions&) {
   changes->require_subcommand(1);
   auto args = std::make_shared<ApplyArgs>();
   CLI::App* apply = changes->add_subcommand(
-      "apply", "Write a copy of the scene with the change set's moves and colours applied (.tws)");
+      "apply", "Write a copy of the scene with the change set's moves and colours applied (.tws); "
+               "an IFC scene to an .ifc gets its moved products placed anew");
   apply->add_option("scene", args->scene, "Scene file the package was made from")
       ->required()->check(CLI::ExistingFile);
   apply->add_option("changes", args->changes, "Change set (model.changes.json)")
       ->required()->check(CLI::ExistingFile);
-  apply->add_option("-o,--out", args->out, "New scene (.tws)")->required();
+  apply->add_option("-o,--out", args->out, "New scene (.tws; .ifc for an IFC scene)")->required();
   apply->add_option("--up", args->up, "The scene file's up axis, as for preprocess")
       ->check(CLI::IsMember({"auto", "y", "z"}));
   apply->callback([args] { runApply(*args); });
