@@ -99,4 +99,12 @@ Frustum makeFrustum(const Camera& camera, const glm::dvec3& eye, double aspect) 
   return frustum;
 }
 
+std::optional<glm::dvec2> imagePoint(const Camera& camera, int width, int height,
+                                     const glm::dvec3& world) {
+  const glm::dmat4 m = camera.projection(double(width) / height) * camera.viewRotation();
+  const glm::dvec4 c = m * glm::dvec4(world - camera.position, 1.0);
+  if (c.w <= 1e-9) return std::nullopt;
+  return glm::dvec2((c.x / c.w * 0.5 + 0.5) * width, (0.5 - c.y / c.w * 0.5) * height);
+}
+
 }  // namespace tw

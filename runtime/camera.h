@@ -9,6 +9,8 @@
 // glDepthFunc(GL_GREATER), depth precision is nearly uniform in log distance.
 #pragma once
 
+#include <optional>
+
 #include <glm/glm.hpp>
 
 namespace tw {
@@ -43,6 +45,11 @@ struct Camera {
   // Points the camera from its position at `target` (world), keeping Z up.
   void lookAt(const glm::dvec3& target);
 };
+
+// Where a world point lands on a `width` x `height` image seen by `camera` (pixels, top left,
+// y down); nullopt behind the eye. For what is drawn over a frame (the viewer's gizmo, measures).
+std::optional<glm::dvec2> imagePoint(const Camera& camera, int width, int height,
+                                     const glm::dvec3& world);
 
 // Six planes (near, far, left, right, bottom, top) with inward unit normals, in the frame the
 // eye was given in (world, or package frame = world - origin): dot(n, p) + d >= 0 inside.

@@ -139,16 +139,15 @@ struct ScreenRect {
 
 ScreenRect project(const Camera& camera, int width, int height, const glm::dvec3& lo,
                    const glm::dvec3& hi) {
-  const glm::dmat4 m = camera.projection(double(width) / height) * camera.viewRotation();
   ScreenRect r;
   for (int k = 0; k < 8; ++k) {
     const glm::dvec3 p((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
-    const glm::dvec4 c = m * glm::dvec4(p - camera.position, 1.0);
-    const double x = (c.x / c.w * 0.5 + 0.5) * width, y = (0.5 - c.y / c.w * 0.5) * height;
-    r.x0 = std::min(r.x0, x);
-    r.x1 = std::max(r.x1, x);
-    r.y0 = std::min(r.y0, y);
-    r.y1 = std::max(r.y1, y);
+    const std::optional<glm::dvec2> s = imagePoint(camera, width, height, p);
+    if (!s) continue;
+    r.x0 = std::min(r.x0, s->x);
+    r.x1 = std::max(r.x1, s->x);
+    r.y0 = std::min(r.y0, s->y);
+    r.y1 = std::max(r.y1, s->y);
   }
   return r;
 }

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <numbers>
 
@@ -11,6 +10,7 @@
 
 #include "bcf_ids.h"
 #include "change_set_view.h"
+#include "view_log.h"
 
 namespace tw {
 namespace {
@@ -21,24 +21,11 @@ const glm::dvec3 kAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 const ImU32 kAxisColours[3] = {IM_COL32(220, 50, 40, 255), IM_COL32(40, 180, 60, 255),
                                IM_COL32(50, 90, 230, 255)};
 
-// A line on stdout for the user (and the scripts' logs), flushed at once.
-void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void say(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  std::vprintf(format, args);
-  va_end(args);
-  std::fflush(stdout);
-}
-
 double snap(double value, double step) { return std::round(value / step) * step; }
 
 // A world point on the window, y down; nullopt behind the eye.
 std::optional<glm::dvec2> screen(const Camera& camera, int width, int height, const glm::dvec3& p) {
-  const glm::dmat4 m = camera.projection(double(width) / height) * camera.viewRotation();
-  const glm::dvec4 c = m * glm::dvec4(p - camera.position, 1.0);
-  if (c.w <= 1e-9) return std::nullopt;
-  return glm::dvec2((c.x / c.w * 0.5 + 0.5) * width, (0.5 - c.y / c.w * 0.5) * height);
+  return imagePoint(camera, width, height, p);
 }
 
 double distanceToSegment(const glm::dvec2& p, const glm::dvec2& a, const glm::dvec2& b) {
@@ -74,7 +61,7 @@ ViewEdits::ViewEdits(Walkthrough& walk, ViewSelection& selection, std::filesyste
     changes_ = readChangeSet(file_);
     refresh();
     if (!changes_.empty())
-      say("edits: %zu changes from %s\n", changes_.changes().size(), file_.string().c_str());
+      viewSay("edits: %zu changes from %s\n", changes_.changes().size(), file_.string().c_str());
   } catch (const std::exception& e) {
     load_error_ = e.what();
     changes_ = ChangeSet();
@@ -146,7 +133,7 @@ void ViewEdits::moveSelection(const glm::dvec3& translation) {
     return c;
   });
   if (!drag_)
-    say("edits: moved %zu objects by (%.3f, %.3f, %.3f) m\n", selectedKeys().size(), t.x, t.y, t.z);
+    viewSay("edits: moved %zu objects by (%.3f, %.3f, %.3f) m\n", selectedKeys().size(), t.x, t.y, t.z);
 }
 
 void ViewEdits::rotateSelection(const glm::dvec3& axis, double degrees) {
@@ -159,7 +146,7 @@ void ViewEdits::rotateSelection(const glm::dvec3& axis, double degrees) {
     c.transform = moveTransform(centre, glm::dvec3(0.0), axis, d * std::numbers::pi / 180.0);
     return c;
   });
-  if (!drag_) say("edits: rotated %zu objects by %.0f degrees\n", selectedKeys().size(), d);
+  if (!drag_) viewSay("edits: rotated %zu objects by %.0f degrees\n", selectedKeys().size(), d);
 }
 
 void ViewEdits::scaleSelection(double factor) {
@@ -196,7 +183,7 @@ void ViewEdits::commentSelection(const std::string& text) {
 bool ViewEdits::undo() {
   const bool done = changes_.undo();
   if (done) refresh();
-  say("edits: %s (%zu changes, %zu to redo)\n", done ? "undone" : "nothing to undo",
+  viewSay("edits: %s (%zu changes, %zu to redo)\n", done ? "undone" : "nothing to undo",
               changes_.undoable(), changes_.redoable());
   return done;
 }
@@ -204,7 +191,7 @@ bool ViewEdits::undo() {
 bool ViewEdits::redo() {
   const bool done = changes_.redo();
   if (done) refresh();
-  say("edits: %s (%zu changes, %zu to redo)\n", done ? "redone" : "nothing to redo",
+  viewSay("edits: %s (%zu changes, %zu to redo)\n", done ? "redone" : "nothing to redo",
               changes_.undoable(), changes_.redoable());
   return done;
 }
@@ -220,7 +207,7 @@ bool ViewEdits::save() {
     std::fprintf(stderr, "terawalk: %s\n", e.what());
     return false;
   }
-  say("edits: %zu changes saved to %s\n", changes_.changes().size(), file_.string().c_str());
+  viewSay("edits: %zu changes saved to %s\n", changes_.changes().size(), file_.string().c_str());
   return true;
 }
 
@@ -246,7 +233,7 @@ void ViewEdits::explode(double factor, double now_s) {
   explode_from_ = explode_now_;
   explode_to_ = factor;
   explode_start_s_ = now_s;
-  say("edits: explode to %.2f over %zu objects\n", factor, explode_offsets_.size());
+  viewSay("edits: explode to %.2f over %zu objects\n", factor, explode_offsets_.size());
 }
 
 void ViewEdits::update(double now_s) {
@@ -350,7 +337,7 @@ ViewEdits::Handle ViewEdits::hit(const Gizmo& g, const Camera& camera, int width
 void ViewEdits::toggleGizmo() {
   show_gizmo_ = !show_gizmo_;
   if (!show_gizmo_) release();
-  say("edits: gizmo %s\n", show_gizmo_ ? "on" : "off");
+  viewSay("edits: gizmo %s\n", show_gizmo_ ? "on" : "off");
 }
 
 bool ViewEdits::press(const Camera& camera, int width, int height, double x, double y) {
@@ -404,7 +391,7 @@ void ViewEdits::release() {
   if (made == 0) return;
   const Change& last = changes_.changes().back();
   const glm::dvec3 t = last.new_pivot - last.old_pivot;
-  say("edits: gizmo drag: %zu changes, the last moving %s by (%.3f, %.3f, %.3f) m\n", made,
+  viewSay("edits: gizmo drag: %zu changes, the last moving %s by (%.3f, %.3f, %.3f) m\n", made,
               last.key.c_str(), t.x, t.y, t.z);
 }
 

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdarg>
 #include <cstdio>
 #include <numbers>
 
@@ -13,6 +12,7 @@
 #include "object_distance.h"
 #include "object_pick.h"
 #include "object_queries.h"
+#include "view_log.h"
 
 namespace tw {
 namespace {
@@ -20,20 +20,10 @@ namespace {
 constexpr double kSnapPx = 10.0;
 const ImU32 kMeasureColour = IM_COL32(255, 0, 255, 255);
 
-void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void say(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  std::vprintf(format, args);
-  va_end(args);
-  std::fflush(stdout);
-}
-
 std::optional<ImVec2> screen(const Camera& camera, int width, int height, const glm::dvec3& p) {
-  const glm::dmat4 m = camera.projection(double(width) / height) * camera.viewRotation();
-  const glm::dvec4 c = m * glm::dvec4(p - camera.position, 1.0);
-  if (c.w <= 1e-9) return std::nullopt;
-  return ImVec2(float((c.x / c.w * 0.5 + 0.5) * width), float((0.5 - c.y / c.w * 0.5) * height));
+  const std::optional<glm::dvec2> s = imagePoint(camera, width, height, p);
+  if (!s) return std::nullopt;
+  return ImVec2(float(s->x), float(s->y));
 }
 
 }  // namespace
@@ -49,7 +39,7 @@ std::string ViewMeasure::keyOf(uint32_t object) const {
 
 void ViewMeasure::toggle() {
   on_ = !on_;
-  say("measure: %s\n", on_ ? "on (clicks place points)" : "off");
+  viewSay("measure: %s\n", on_ ? "on (clicks place points)" : "off");
 }
 
 bool ViewMeasure::addPoint(const Camera& camera, int x, int y) {
@@ -57,7 +47,7 @@ bool ViewMeasure::addPoint(const Camera& camera, int x, int y) {
   if (x < 0 || y < 0 || x >= r.width() || y >= r.height()) return false;
   const std::optional<Pick> pick = pickPixel(r, camera, x, y);
   if (!pick) {
-    say("measure: nothing under %d,%d\n", x, y);
+    viewSay("measure: nothing under %d,%d\n", x, y);
     return false;
   }
   if (points_.size() == 3) points_.clear();
@@ -70,7 +60,7 @@ bool ViewMeasure::addPoint(const Camera& camera, int x, int y) {
                                         placement_(keyOf(pick->object)));
   const SnappedPoint p = snapPoint(walk_.package(), shape, pick->world, radius);
   points_.push_back(p);
-  say("measure: point %zu (%s) at (%.4f, %.4f, %.4f)\n", points_.size(), snapKindName(p.kind),
+  viewSay("measure: point %zu (%s) at (%.4f, %.4f, %.4f)\n", points_.size(), snapKindName(p.kind),
       p.world.x, p.world.y, p.world.z);
   char text[160];
   if (points_.size() == 2) {
@@ -78,13 +68,13 @@ bool ViewMeasure::addPoint(const Camera& camera, int x, int y) {
     std::snprintf(text, sizeof text, "distance %.4f m  (dx %.4f, dy %.4f, dz %.4f)", glm::length(d),
                   d.x, d.y, d.z);
     result_ = text;
-    say("measure: %s\n", text);
+    viewSay("measure: %s\n", text);
   } else if (points_.size() == 3) {
     const glm::dvec3 a = points_[0].world - points_[1].world, b = points_[2].world - points_[1].world;
     const double angle = std::acos(std::clamp(glm::dot(a, b) / (glm::length(a) * glm::length(b)), -1.0, 1.0));
     std::snprintf(text, sizeof text, "angle %.3f deg", angle * 180.0 / std::numbers::pi);
     result_ = text;
-    say("measure: %s\n", text);
+    viewSay("measure: %s\n", text);
   }
   return true;
 }
@@ -98,7 +88,7 @@ bool ViewMeasure::between(bool centre_lines) {
     if (std::find(keys.begin(), keys.end(), key) == keys.end()) keys.push_back(key);
   }
   if (keys.size() != 2) {
-    say("measure: select two objects (%zu selected)\n", keys.size());
+    viewSay("measure: select two objects (%zu selected)\n", keys.size());
     return false;
   }
   auto objectsOf = [&](const std::string& key) {
@@ -123,10 +113,10 @@ bool ViewMeasure::between(bool centre_lines) {
     std::snprintf(text, sizeof text, "%s to %s: %.6f m (%s)", keys[0].c_str(), keys[1].c_str(),
                   glm::length(d.points.b - d.points.a), d.method.c_str());
     result_ = text;
-    say("measure: between %s\n", text);
+    viewSay("measure: between %s\n", text);
     return true;
   } catch (const std::exception& e) {
-    say("measure: %s\n", e.what());
+    viewSay("measure: %s\n", e.what());
     return false;
   }
 }

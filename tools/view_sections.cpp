@@ -1,27 +1,14 @@
 // The viewer's section planes (view_sections.h).
 #include "view_sections.h"
 
-#include <cstdarg>
 #include <cstdio>
 
 #include <imgui.h>
 
 #include "object_pick.h"
+#include "view_log.h"
 
 namespace tw {
-namespace {
-
-void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void say(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  std::vprintf(format, args);
-  va_end(args);
-  std::fflush(stdout);
-}
-
-}  // namespace
-
 ViewSections::ViewSections(Walkthrough& walk, const ViewSelection& selection)
     : walk_(walk), selection_(selection) {}
 
@@ -33,7 +20,7 @@ bool ViewSections::placeAt(const Camera& camera, int x, int y) {
   };
   const std::optional<Pick> centre = at(x, y);
   if (!centre) {
-    say("sections: nothing under %d,%d\n", x, y);
+    viewSay("sections: nothing under %d,%d\n", x, y);
     return false;
   }
   // The surface's normal from two neighbouring points on the same object.
@@ -50,13 +37,13 @@ bool ViewSections::placeAt(const Camera& camera, int x, int y) {
 
 bool ViewSections::add(const SectionPlane& plane) {
   if (planes_.size() >= kMaxUserSectionPlanes) {
-    say("sections: %zu planes already, at most %zu\n", planes_.size(), kMaxUserSectionPlanes);
+    viewSay("sections: %zu planes already, at most %zu\n", planes_.size(), kMaxUserSectionPlanes);
     return false;
   }
   planes_.push_back(plane);
   drag_m_ = 0.0f;
   apply();
-  say("sections: plane %zu at (%.3f, %.3f, %.3f), normal (%.3f, %.3f, %.3f)\n", planes_.size(),
+  viewSay("sections: plane %zu at (%.3f, %.3f, %.3f), normal (%.3f, %.3f, %.3f)\n", planes_.size(),
       plane.point.x, plane.point.y, plane.point.z, plane.normal.x, plane.normal.y, plane.normal.z);
   return true;
 }
@@ -65,7 +52,7 @@ void ViewSections::offsetLast(double metres) {
   if (planes_.empty()) return;
   planes_.back().point += planes_.back().normal * metres;
   apply();
-  say("sections: plane %zu moved %.3f m along its normal\n", planes_.size(), metres);
+  viewSay("sections: plane %zu moved %.3f m along its normal\n", planes_.size(), metres);
 }
 
 bool ViewSections::boxAroundSelection(double margin) {
@@ -73,7 +60,7 @@ bool ViewSections::boxAroundSelection(double margin) {
   if (!selection_.bounds(lo, hi)) return false;
   box_ = std::make_pair(lo - glm::dvec3(margin), hi + glm::dvec3(margin));
   apply();
-  say("sections: box around the selection\n");
+  viewSay("sections: box around the selection\n");
   return true;
 }
 
@@ -82,7 +69,7 @@ void ViewSections::clear() {
   box_.reset();
   drag_m_ = 0.0f;
   apply();
-  say("sections: cleared\n");
+  viewSay("sections: cleared\n");
 }
 
 std::vector<SectionPlane> ViewSections::all() const {

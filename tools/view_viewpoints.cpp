@@ -4,7 +4,6 @@
 #define GL_GLEXT_PROTOTYPES 1
 #include <GL/glcorearb.h>
 
-#include <cstdarg>
 #include <cstdio>
 
 #include <imgui.h>
@@ -12,20 +11,12 @@
 #include "bcf_archive.h"
 #include "bcf_ids.h"
 #include "image_compare.h"
+#include "view_log.h"
 
 namespace tw {
 namespace {
 
 constexpr int kThumbWidth = 160;
-
-void say(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void say(const char* format, ...) {
-  va_list args;
-  va_start(args, format);
-  std::vprintf(format, args);
-  va_end(args);
-  std::fflush(stdout);
-}
 
 }  // namespace
 
@@ -57,7 +48,7 @@ ViewViewpoints::ViewViewpoints(Walkthrough& walk, ViewSelection& selection, View
     }
     entries_.push_back(std::move(entry));
   }
-  say("viewpoints: %zu from %s\n", entries_.size(), file_.string().c_str());
+  viewSay("viewpoints: %zu from %s\n", entries_.size(), file_.string().c_str());
 }
 
 ViewViewpoints::~ViewViewpoints() {
@@ -116,7 +107,7 @@ bool ViewViewpoints::save(const std::string& name, const Camera& camera) {
     std::fprintf(stderr, "terawalk: %s\n", e.what());
     return false;
   }
-  say("viewpoints: saved '%s' (%zu in %s)\n", name.c_str(), entries_.size(), file_.string().c_str());
+  viewSay("viewpoints: saved '%s' (%zu in %s)\n", name.c_str(), entries_.size(), file_.string().c_str());
   return true;
 }
 
@@ -136,7 +127,7 @@ bool ViewViewpoints::apply(const Entry& entry, Camera& camera) {
     }
   selection_.select(selected);
   for (const std::string& w : applied.warnings) std::fprintf(stderr, "terawalk: warning: %s\n", w.c_str());
-  say("viewpoints: went to '%s' (%zu selected, %u hidden)\n", entry.title.c_str(),
+  viewSay("viewpoints: went to '%s' (%zu selected, %u hidden)\n", entry.title.c_str(),
       selection_.selected().size(), applied.hidden);
   return true;
 }
@@ -144,7 +135,7 @@ bool ViewViewpoints::apply(const Entry& entry, Camera& camera) {
 bool ViewViewpoints::go(const std::string& name, Camera& camera) {
   for (const Entry& e : entries_)
     if (e.title == name) return apply(e, camera);
-  say("viewpoints: none named '%s'\n", name.c_str());
+  viewSay("viewpoints: none named '%s'\n", name.c_str());
   return false;
 }
 
