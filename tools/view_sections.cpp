@@ -100,6 +100,17 @@ void ViewSections::drawPanel() {
   if (ImGui::Button("Box around selection")) boxAroundSelection(0.05);
   ImGui::SameLine();
   if (ImGui::Button("Clear")) clear();
+  // Typed in: a point and the normal toward the side removed, world metres.
+  ImGui::InputText("##plane", typed_, sizeof typed_);
+  ImGui::SameLine();
+  if (ImGui::Button("Add X,Y,Z,NX,NY,NZ")) {
+    try {
+      add(parseSectionPlane(typed_));
+      typed_[0] = '\0';
+    } catch (const std::exception& e) {
+      viewSay("sections: %s\n", e.what());
+    }
+  }
   if (!planes_.empty()) {
     float drag = drag_m_;
     if (ImGui::SliderFloat("drag last (m)", &drag, -10.0f, 10.0f, "%.2f")) {

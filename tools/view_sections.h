@@ -50,6 +50,7 @@ class ViewSections {
   std::optional<std::pair<glm::dvec3, glm::dvec3>> box_;
   bool placing_ = false;
   float drag_m_ = 0.0f;  // the panel's slider: the last plane's offset from where it was placed
+  char typed_[128] = {};  // the panel's field for a typed-in plane
 };
 
 }  // namespace tw
