@@ -67,6 +67,16 @@ MovedObjectsPass::~MovedObjectsPass() {
 }
 
 void MovedObjectsPass::set(std::vector<MovedMesh> meshes) {
+  // The same objects with new moves (a drag, the explode animation): only the moves change, the
+  // uploaded triangles stay.
+  bool same = meshes.size() == meshes_.size();
+  for (size_t i = 0; same && i < meshes.size(); ++i)
+    same = meshes[i].object == meshes_[i].object && meshes[i].anchor == meshes_[i].anchor &&
+           meshes[i].triangles.size() == meshes_[i].triangles.size();
+  if (same) {
+    for (size_t i = 0; i < meshes.size(); ++i) meshes_[i].move = meshes[i].move;
+    return;
+  }
   meshes_ = std::move(meshes);
   ranges_.clear();
   triangle_count_ = 0;

@@ -33,7 +33,8 @@ class MovedObjectsPass {
   MovedObjectsPass(const MovedObjectsPass&) = delete;
   MovedObjectsPass& operator=(const MovedObjectsPass&) = delete;
 
-  // Replaces what is drawn (uploads the triangles of meshes not seen before).
+  // Replaces what is drawn. The same objects as before (same order, anchors and triangle counts:
+  // the same geometry) only take their new moves; otherwise the triangles are uploaded again.
   void set(std::vector<MovedMesh> meshes);
   bool empty() const { return meshes_.empty(); }
   uint64_t triangles() const { return triangle_count_; }

@@ -242,16 +242,37 @@ std::string defaultAuthor() {
   return user && *user ? user : "terawalk";
 }
 
+// The package opened headless at the snapshot size (--size).
+struct HeadlessWalk {
+  static WalkthroughOptions options(const ExportArgs& args) {
+    WalkthroughOptions o;
+    parseImageSize(args.size, "--size", o.width, o.height);
+    return o;
+  }
+  explicit HeadlessWalk(const ExportArgs& args) : walk(args.package, options(args)) {}
+  EglContext context;  // first: the walkthrough needs it current
+  Walkthrough walk;
+};
+
+// The viewpoint of what `camera` sees now (states and `sections` as set on `walk`), the view
+// rendered until the cut settles as its snapshot.
+bcf::Viewpoint snapshotViewpoint(Walkthrough& walk, const Camera& camera,
+                                 std::span<const SectionPlane> sections) {
+  walk.renderSettled(camera);
+  const GlRenderer& r = walk.renderer();
+  std::vector<uint8_t> rgba;
+  r.readColor(rgba, true);
+  bcf::Viewpoint v = captureViewpoint(camera, double(r.width()) / r.height(), walk.objectStates(),
+                                      ComponentIndex(walk.package()), sections);
+  v.snapshot_png = encodePngRgba(r.width(), r.height(), rgba);
+  return v;
+}
+
 // The new topic's viewpoint and snapshot: the package opened headless, the viewpoint and state
 // options applied, the camera's view rendered until the cut settles.
 bcf::Viewpoint renderViewpoint(const ExportArgs& args) {
-  int width = 0, height = 0;
-  parseImageSize(args.size, "--size", width, height);
-  EglContext context;
-  WalkthroughOptions options;
-  options.width = width;
-  options.height = height;
-  Walkthrough walk(args.package, options);
+  HeadlessWalk headless(args);
+  Walkthrough& walk = headless.walk;
   const glm::dvec3 lo = walk.worldMin(), hi = walk.worldMax();
   Camera camera;
   camera.far_m = std::max(100.0, 10.0 * glm::length(hi - lo));
@@ -268,36 +289,20 @@ bcf::Viewpoint renderViewpoint(const ExportArgs& args) {
     camera.lookAt(args.look_at.empty() ? 0.5 * (lo + hi) : parseVec3(args.look_at));
   }
   applyReviewState(args.state, walk.package(), walk.objectStates());
-  const std::vector<SectionPlane> own = reviewSectionPlanes(args.state);
-  sections.insert(sections.end(), own.begin(), own.end());
-  if (sections.size() > kMaxSectionPlanes)
-    throw std::invalid_argument(std::to_string(sections.size()) + " section planes, at most " +
-                                std::to_string(kMaxSectionPlanes));
+  sections = withReviewSectionPlanes(std::move(sections), args.state);
   walk.setSections(sections);
-  walk.renderSettled(camera);
-  std::vector<uint8_t> rgba;
-  walk.renderer().readColor(rgba, true);
-  bcf::Viewpoint v = captureViewpoint(camera, double(width) / height, walk.objectStates(),
-                                      ComponentIndex(walk.package()), sections);
-  v.snapshot_png = encodePngRgba(width, height, rgba);
-  return v;
+  return snapshotViewpoint(walk, camera, sections);
 }
 
 // One topic per object a change set names, in the order first named: what changed (moves with
 // their translation, hiding, colour), its comments, and a viewpoint on the object at its new
 // place, selected, with a snapshot drawn with the changes applied.
 std::vector<bcf::Topic> changeTopics(const ExportArgs& args, const ChangeSet& changes) {
-  int width = 0, height = 0;
-  parseImageSize(args.size, "--size", width, height);
-  EglContext context;
-  WalkthroughOptions options;
-  options.width = width;
-  options.height = height;
-  Walkthrough walk(args.package, options);
+  HeadlessWalk headless(args);
+  Walkthrough& walk = headless.walk;
   const PackageView& view = walk.package();
   applyChangeStates(changes, view, walk.objectStates());
   walk.setMovedObjects(movedMeshes(changes, view));
-  const ComponentIndex index(view);
   std::vector<std::string> keys;
   for (const Change& c : changes.changes())
     if (std::find(keys.begin(), keys.end(), c.key) == keys.end()) keys.push_back(c.key);
@@ -349,11 +354,7 @@ std::vector<bcf::Topic> changeTopics(const ExportArgs& args, const ChangeSet& ch
     ObjectStates& states = walk.objectStates();
     states.setAll(kObjectSelected, false);
     for (uint32_t o : objects) states.set(o, kObjectSelected, true);
-    walk.renderSettled(camera);
-    std::vector<uint8_t> rgba;
-    walk.renderer().readColor(rgba, true);
-    bcf::Viewpoint v = captureViewpoint(camera, double(width) / height, states, index, {});
-    v.snapshot_png = encodePngRgba(width, height, rgba);
+    bcf::Viewpoint v = snapshotViewpoint(walk, camera, {});
     for (bcf::Comment& c : topic.comments) c.viewpoint_guid = v.guid;
     topic.viewpoints.push_back(std::move(v));
     topics.push_back(std::move(topic));

@@ -469,12 +469,8 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
     walk.setMovedObjects(movedMeshes(changes, walk.package()));
   }
   applyReviewState(args.state, walk.package(), walk.objectStates());
-  std::vector<SectionPlane> sections = reviewSectionPlanes(args.state);
-  if (viewpoint) sections.insert(sections.end(), viewpoint->sections.begin(), viewpoint->sections.end());
-  if (sections.size() > kMaxSectionPlanes)
-    throw std::invalid_argument(std::to_string(sections.size()) + " section planes, at most " +
-                                std::to_string(kMaxSectionPlanes));
-  walk.setSections(sections);
+  walk.setSections(withReviewSectionPlanes(viewpoint ? viewpoint->sections : std::vector<SectionPlane>{},
+                                           args.state));
 
   Aabb bounds;
   bounds.add(walk.worldMin());

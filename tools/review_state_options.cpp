@@ -98,4 +98,14 @@ std::vector<SectionPlane> reviewSectionPlanes(const ReviewStateArgs& args) {
   return planes;
 }
 
+std::vector<SectionPlane> withReviewSectionPlanes(std::vector<SectionPlane> planes,
+                                                  const ReviewStateArgs& args) {
+  const std::vector<SectionPlane> own = reviewSectionPlanes(args);
+  planes.insert(planes.end(), own.begin(), own.end());
+  if (planes.size() > kMaxSectionPlanes)
+    throw std::invalid_argument(std::to_string(planes.size()) + " section planes, at most " +
+                                std::to_string(kMaxSectionPlanes));
+  return planes;
+}
+
 }  // namespace tw

@@ -36,5 +36,9 @@ void applyReviewState(const ReviewStateArgs& args, const PackageView& view, Obje
 
 // --section (each a plane) and --section-box (six planes facing out of the box), world metres.
 std::vector<SectionPlane> reviewSectionPlanes(const ReviewStateArgs& args);
+// `planes` (a viewpoint's) followed by the options' own; throws std::invalid_argument past
+// kMaxSectionPlanes in all.
+std::vector<SectionPlane> withReviewSectionPlanes(std::vector<SectionPlane> planes,
+                                                  const ReviewStateArgs& args);
 
 }  // namespace tw

@@ -118,6 +118,24 @@ void writeViewSetupHints(XmlOut& out, const Viewpoint& v) {
   out.close();
 }
 
+// Colour groups with an identified component; 3.0 wraps each group's components in Components.
+void writeColoring(XmlOut& out, const Viewpoint& v, bool wrap_components) {
+  bool coloured = false;
+  for (const ColourGroup& g : v.colours) coloured = coloured || countWithIdentity(g.components) > 0;
+  if (!coloured) return;
+  out.open("Coloring");
+  for (const ColourGroup& g : v.colours) {
+    if (countWithIdentity(g.components) == 0) continue;
+    out.open("Color");
+    out.attribute("Color", colourText(g.argb));
+    if (wrap_components) out.open("Components");
+    writeComponents(out, g.components);
+    if (wrap_components) out.close();
+    out.close();
+  }
+  out.close();
+}
+
 void writeComponentsV21(XmlOut& out, const Viewpoint& v) {
   out.open("Components");
   writeViewSetupHints(out, v);
@@ -134,19 +152,7 @@ void writeComponentsV21(XmlOut& out, const Viewpoint& v) {
     out.close();
   }
   out.close();
-  bool coloured = false;
-  for (const ColourGroup& g : v.colours) coloured = coloured || countWithIdentity(g.components) > 0;
-  if (coloured) {
-    out.open("Coloring");
-    for (const ColourGroup& g : v.colours) {
-      if (countWithIdentity(g.components) == 0) continue;
-      out.open("Color");
-      out.attribute("Color", colourText(g.argb));
-      writeComponents(out, g.components);
-      out.close();
-    }
-    out.close();
-  }
+  writeColoring(out, v, false);
   out.close();
 }
 
@@ -166,21 +172,7 @@ void writeComponentsV30(XmlOut& out, const Viewpoint& v) {
     out.close();
   }
   out.close();
-  bool coloured = false;
-  for (const ColourGroup& g : v.colours) coloured = coloured || countWithIdentity(g.components) > 0;
-  if (coloured) {
-    out.open("Coloring");
-    for (const ColourGroup& g : v.colours) {
-      if (countWithIdentity(g.components) == 0) continue;
-      out.open("Color");
-      out.attribute("Color", colourText(g.argb));
-      out.open("Components");
-      writeComponents(out, g.components);
-      out.close();
-      out.close();
-    }
-    out.close();
-  }
+  writeColoring(out, v, true);
   out.close();
 }
 
