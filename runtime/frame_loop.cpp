@@ -190,6 +190,7 @@ uint64_t Walkthrough::redrawUnculled() {
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).first(first));
   drawParametrics(last_parametric_, nullptr);
   renderer_->draw(*pool_, std::span<const DrawItem>(items_).subspan(first));
+  drawEnvironment(last_eye_, last_time_s_, nullptr);
   drawGhostLists(last_eye_, nullptr);
   const RenderStats render_stats = renderer_->endFrame();
   glFinish();
@@ -249,6 +250,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
     moved_->draw(*renderer_, eye, last_projection_ * last_rotation_);
     stats.triangles_drawn += moved_->triangles();
   }
+  drawEnvironment(eye, time_s, &stats);
   drawGhostsAndOutlines(eye, cut_list, parametric_cut, stats);
   finishFrame(frame_start, stats);
   return stats;
@@ -261,11 +263,26 @@ void Walkthrough::setMovedObjects(std::vector<MovedMesh> meshes) {
   moved_->set(std::move(meshes));
 }
 
-FrameStats Walkthrough::renderSettled(const Camera& camera, bool* settled, int max_frames) {
+void Walkthrough::setEnvironment(const EnvironmentOptions& options) {
+  if (!environment_) environment_ = std::make_unique<EnvironmentPass>();
+  environment_->set(options);
+}
+
+void Walkthrough::drawEnvironment(const glm::dvec3& eye, double time_s, FrameStats* stats) {
+  if (!environment_ || !environment_->active()) return;
+  const EnvironmentStats drawn =
+      environment_->draw(*renderer_, eye + view_->origin(), last_rotation_, last_projection_, time_s);
+  if (!stats) return;
+  stats->ocean_triangles = drawn.ocean_triangles;
+  stats->ocean_cpu_ms = drawn.ocean_mesh_ms;
+}
+
+FrameStats Walkthrough::renderSettled(const Camera& camera, bool* settled, int max_frames,
+                                      double time_s) {
   FrameStats stats;
   int steady = 0;
   for (int i = 0; i < max_frames && steady < 3; ++i) {
-    stats = renderFrame(camera, 0.0);
+    stats = renderFrame(camera, time_s);
     steady = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady + 1 : 0;
   }
   if (settled) *settled = steady == 3;

@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "camera.h"
+#include "environment/environment_pass.h"
 #include "frame_stats.h"
 #include "gl_renderer.h"
 #include "lod_cut.h"
@@ -79,7 +80,9 @@ class Walkthrough {
   // Renders frames from `camera` until the cut holds what the view asks for (three frames in a
   // row with no page missing and no ancestor drawn instead), at most max_frames. Returns the last
   // frame's statistics; `settled` says whether it got there. For picks and still pictures.
-  FrameStats renderSettled(const Camera& camera, bool* settled = nullptr, int max_frames = 200);
+  // `time_s` is every frame's time (the ocean's waves stand still at it).
+  FrameStats renderSettled(const Camera& camera, bool* settled = nullptr, int max_frames = 200,
+                           double time_s = 0.0);
 
   // Draws the last frame's whole cut again into the same targets with the same camera and no
   // occlusion culling, in the order the frame drew (hzb: last frame's visible clusters first,
@@ -119,6 +122,10 @@ class Walkthrough {
   // full-resolution geometry in every frame; they get kObjectMoved and every other object loses
   // it, so the clusters leave them out at every level. Empty: nothing moved.
   void setMovedObjects(std::vector<MovedMesh> meshes);
+  // The ocean and the sky around the model (environment/environment_pass.h), drawn from the
+  // next frame on after the opaque passes; validated by the caller (validateEnvironment).
+  void setEnvironment(const EnvironmentOptions& options);
+  const EnvironmentOptions* environment() const { return environment_ ? &environment_->options() : nullptr; }
   // World bounds of the model (double), for cameras and paths.
   glm::dvec3 worldMin() const;
   glm::dvec3 worldMax() const;
@@ -167,6 +174,9 @@ class Walkthrough {
   std::unique_ptr<OcclusionCuller> culler_;
   std::unique_ptr<ParametricRenderer> parametric_;
   std::unique_ptr<MovedObjectsPass> moved_;
+  std::unique_ptr<EnvironmentPass> environment_;
+  // Draws the ocean and sky seen from the package-frame `eye` at `time_s`; adds to `stats`.
+  void drawEnvironment(const glm::dvec3& eye, double time_s, FrameStats* stats);
   std::vector<uint32_t> all_parametric_;   // reference mode: every parametric cluster
   std::vector<uint32_t> last_parametric_;  // the last frame's parametric clusters (whole cut)
   // hzb: the cut's mesh and parametric clusters together, and each pass split by kind.

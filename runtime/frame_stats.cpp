@@ -67,6 +67,8 @@ void visitFields(const FrameStats& s, Visit visit) {
   visit("occlusion_lost_px", s.occlusion_lost_px);
   visit("occlusion_lost_share", SmallShare{s.occlusion_lost_share});
   visit("occlusion_lost_depth_px", s.occlusion_lost_depth_px);
+  visit("ocean_triangles", s.ocean_triangles);
+  visit("ocean_cpu_ms", s.ocean_cpu_ms);
 }
 
 void to_json(nlohmann::json& j, SmallShare v) { j = v.value; }

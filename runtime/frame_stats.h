@@ -71,6 +71,10 @@ struct FrameStats {
   int64_t occlusion_lost_px = -1;
   double occlusion_lost_share = -1.0;
   int64_t occlusion_lost_depth_px = -1;  // id or depth differs
+  // The setting (environment/environment_pass.h): the ocean's triangles, and the CPU time to
+  // build and upload its mesh; 0 without an ocean.
+  uint64_t ocean_triangles = 0;
+  double ocean_cpu_ms = 0.0;
 };
 
 // Resident set size of this process now, from /proc/self/statm (0 if unavailable).

@@ -13,6 +13,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -23,6 +24,7 @@
 #include "command.h"
 #include "command_args.h"
 #include "egl_context.h"
+#include "environment_options.h"
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_queries.h"
@@ -33,6 +35,7 @@
 #include "snapshot_camera.h"
 #include "soak_log.h"
 #include "tessellate.h"
+#include "video_encoder.h"
 
 namespace tw {
 namespace {
@@ -77,8 +80,10 @@ struct RenderArgs {
   int hzb_split = BoxTest{}.split_px;
   // Per-object state and sections along the whole path (object_states.h, section_planes.h).
   ReviewStateArgs state;
+  EnvironmentArgs environment;  // --ocean, --sky and their settings
   std::string viewpoint;  // FILE.bcfzip[#N]
   std::string changes;    // a change set (model.changes.json)
+  std::string video;      // FILE.mp4|.mkv|.avi: the recorded frames as a video
 };
 
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
@@ -141,6 +146,8 @@ void validateArgs(const RenderArgs& args) {
     throw std::runtime_error("a generated path has at most " + std::to_string(kMaxGeneratedFrames) +
                              " frames");
   if (args.png && args.out_dir.empty()) throw std::runtime_error("--png needs --out DIR");
+  if (!args.video.empty() && (args.soak_interval_s > 0.0 || args.check_occlusion))
+    throw std::runtime_error("--video cannot be combined with --soak-interval or --check-occlusion");
   if (!(args.max_seconds >= 0.0 && args.max_seconds <= 1e7))
     throw std::runtime_error("--max-seconds " + number(args.max_seconds) + ": must be 0 (no limit) to 1e7");
   if (args.soak_interval_s != 0.0 && (args.out_dir.empty() || !(args.soak_interval_s > 0.0) ||
@@ -267,7 +274,24 @@ struct RenderedPath {
   std::vector<std::string> load_errors;  // pages that failed to load, in order
   uint64_t soak_frames = 0, soak_intervals = 0, soak_peak_rss = 0;  // --soak-interval (frames
                                                                      // then logs none)
+  uint64_t video_frames = 0;
+  std::string video_error;  // why the video stopped (ffmpeg failed); the PNGs went on
 };
+
+// --video: each recorded frame, rendered settled (a film waits for its pages), goes to ffmpeg.
+// A failure (a full disk) stops the video but not the PNGs; it is reported at the end.
+void writeVideoFrame(VideoEncoder& video, Walkthrough& walk, std::vector<uint8_t>& rgba, bool have_rgba,
+                     RenderedPath& rendered) {
+  if (!rendered.video_error.empty()) return;
+  if (!have_rgba) walk.renderer().readColor(rgba, true);
+  try {
+    video.write(rgba);
+    ++rendered.video_frames;
+  } catch (const std::runtime_error& e) {
+    rendered.video_error = e.what();
+    std::fprintf(stderr, "terawalk: error: %s\n", e.what());
+  }
+}
 
 // Pages that failed to load (a checksum mismatch, a read error) are drawn from their coarser
 // ancestors; each is said once on stderr, as it happens, so the frames are not silently wrong.
@@ -284,7 +308,7 @@ void reportLoadErrors(Walkthrough& walk, RenderedPath& rendered) {
 
 RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Walkthrough& walk,
                         const CameraPath& path, const Aabb& bounds, Clock::time_point open_start,
-                        OcclusionLossCheck& occlusion_check) {
+                        OcclusionLossCheck& occlusion_check, VideoEncoder* video) {
   Camera base;
   const double diagonal = glm::length(bounds.max - bounds.min);
   base.near_m = 0.05;
@@ -310,6 +334,11 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
   std::vector<uint8_t> rgba;
   std::vector<uint32_t> ids;
   const double t0 = path.keys.front().time_s;
+  std::unique_ptr<Progress> progress;
+  if (video) {
+    progress = makeCommandProgress(global);
+    progress->beginStage("video", uint64_t(frames));
+  }
   const Clock::time_point loop_start = Clock::now();
   for (int i = 0; i < frames; ++i) {
     if (args.max_seconds > 0.0 && msSince(loop_start) >= args.max_seconds * 1000.0) break;
@@ -321,21 +350,27 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
       walk.renderFrame(path.sample(walk_t, base), walk_t);
       ++rendered.walk_frames;
     }
-    FrameStats stats = still ? walk.renderSettled(path.sample(t, base))
-                             : walk.renderFrame(path.sample(t, base), t);
+    FrameStats stats = still || video ? walk.renderSettled(path.sample(t, base), nullptr, 200, t)
+                                      : walk.renderFrame(path.sample(t, base), t);
     stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
     reportLoadErrors(walk, rendered);
     if (i == 0) rendered.first_frame_ms = msSince(open_start);
     if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
+    if (video) {
+      writeVideoFrame(*video, walk, rgba, args.png, rendered);
+      if (!rendered.video_error.empty() && !args.png) break;
+      if (progress) progress->update(uint64_t(i + 1));
+    }
     if (args.check_occlusion) occlusion_check.check(walk, stats);
     if (soak)
       soak->add(stats);
     else
       rendered.frames.push_back(stats);
-    if (!global.quiet && (i % 30 == 0 || i + 1 == frames))
+    if (!global.quiet && !video && (i % 30 == 0 || i + 1 == frames))
       std::fprintf(stderr, "render: frame %d/%d  %.1f ms  %llu triangles\n", i + 1, frames,
                    stats.frame_ms, static_cast<unsigned long long>(stats.triangles_drawn));
   }
+  if (progress) progress->endStage();
   if (soak) {
     soak->finish();
     rendered.soak_frames = soak->frames();
@@ -426,6 +461,12 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"peak_rss_bytes", peak_rss},
       {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
       {"host_budget_bytes", options.pager.host_budget_bytes},
+      {"video", args.video},
+      {"video_frames", rendered.video_frames},
+      {"ocean", args.environment.ocean},
+      {"sky", args.environment.sky},
+      {"median_ocean_triangles", medianOf(all, [](const FrameStats& f) { return f.ocean_triangles; })},
+      {"median_ocean_cpu_ms", medianOf(all, [](const FrameStats& f) { return f.ocean_cpu_ms; })},
       {"renderer", context.renderer()},
   };
 }
@@ -469,6 +510,8 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
     walk.setMovedObjects(movedMeshes(changes, walk.package()));
   }
   applyReviewState(args.state, walk.package(), walk.objectStates());
+  if (const auto environment = environmentOptions(args.environment, 0.5 * (walk.worldMin() + walk.worldMax())))
+    walk.setEnvironment(*environment);
   walk.setSections(withReviewSectionPlanes(viewpoint ? viewpoint->sections : std::vector<SectionPlane>{},
                                            args.state));
 
@@ -484,12 +527,25 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
     path = cameraPath(args, bounds);
   }
   OcclusionLossCheck occlusion_check;
-  const RenderedPath rendered =
-      renderPath(args, global, walk, path, bounds, open_start, occlusion_check);
+  std::optional<VideoEncoder> video;
+  if (!args.video.empty()) video.emplace(args.video, width, height, args.fps);
+  RenderedPath rendered = renderPath(args, global, walk, path, bounds, open_start, occlusion_check,
+                                     video ? &*video : nullptr);
+  if (video && rendered.video_error.empty()) {
+    try {
+      video->finish();
+    } catch (const std::runtime_error& e) {
+      rendered.video_error = e.what();
+    }
+  }
   nlohmann::json summary = renderSummary(args, options, context, walk, rendered, times);
   if (args.check_occlusion) occlusion_check.summarize(args, rendered.frames, summary);
   if (!args.out_dir.empty()) writeRenderOutputs(args.out_dir, rendered, summary);
   std::printf("%s\n", summary.dump(1).c_str());
+  if (!rendered.video_error.empty())
+    throw std::runtime_error(rendered.video_error + (args.png ? "; every frame was still written as PNG to " +
+                                                                    args.out_dir
+                                                              : ""));
   // The frames and statistics are written; the exit status still says they are not the package's.
   if (!rendered.load_errors.empty())
     throw std::runtime_error(std::to_string(rendered.load_errors.size()) +
@@ -592,6 +648,10 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_flag("--hzb-final-rebuild,!--no-hzb-final-rebuild", args->hzb_final_rebuild,
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
   addReviewStateOptions(*cmd, args->state);
+  addEnvironmentOptions(*cmd, args->environment);
+  cmd->add_option("--video", args->video,
+                  "Write the recorded frames as a video at --fps (FILE.mp4 or .mkv: H.264; .avi: "
+                  "MJPEG), each frame rendered settled; needs ffmpeg");
   cmd->add_option("--changes", args->changes,
                   "Draw a review's change set (model.changes.json): moved objects at their new "
                   "placement, hidden and recoloured ones")

@@ -31,6 +31,7 @@
 #include "camera_path.h"
 #include "command.h"
 #include "command_args.h"
+#include "environment_options.h"
 #include "frame_loop.h"
 #include "image_compare.h"
 #include "object_pick.h"
@@ -41,6 +42,7 @@
 #include "snapshot_camera.h"
 #include "section_planes.h"
 #include "view_edits.h"
+#include "view_environment.h"
 #include "view_measure.h"
 #include "view_sections.h"
 #include "view_viewpoints.h"
@@ -66,6 +68,7 @@ struct ViewArgs {
   std::string parametrics = "auto";
   std::string db;      // the project database, for the properties panel
   std::string script;  // clicks and keys at given frames (view_script.h)
+  EnvironmentArgs environment;  // --ocean, --sky and their settings
 };
 
 struct GlfwSession {
@@ -267,8 +270,8 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
                  ViewEdits& edits, ViewSections& sections, ViewViewpoints& viewpoints,
-                 ViewMeasure& measure, Camera& camera, double now_s, int window_width,
-                 int window_height) {
+                 ViewMeasure& measure, ViewEnvironment& environment, Camera& camera, double now_s,
+                 int window_width, int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -278,6 +281,7 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   edits.drawPanel(now_s);
   sections.drawPanel();
   measure.drawPanel();
+  environment.drawPanel();
   measure.draw(camera, window_width, window_height);
   const Camera current = camera;
   viewpoints.drawPanel(camera, current);
@@ -513,6 +517,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   const char* user = std::getenv("USER");
   ViewEdits edits(walk, selection, changeSetPathFor(args.file), user && *user ? user : "terawalk");
   ViewSections sections(walk, selection);
+  const glm::dvec3 model_centre = 0.5 * (walk.worldMin() + walk.worldMax());
+  ViewEnvironment environment(walk, environmentOptions(args.environment, model_centre), model_centre);
   ViewMeasure measure(walk, selection, [&edits](const std::string& key) { return edits.placement(key); });
   ViewViewpoints viewpoints(walk, selection, sections, reviewArchivePathFor(args.file),
                             user && *user ? user : "terawalk");
@@ -629,6 +635,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
             measure.between(true);
           else if (e.action == "measure-clear")
             measure.clear();
+          else if (e.action == "ocean")
+            environment.setOcean(e.text == "on");
+          else if (e.action == "sky")
+            environment.setSky(e.text == "on");
           else if (e.action == "save-viewpoint")
             viewpoints.save(e.text, camera);
           else if (e.action == "go-viewpoint")
@@ -658,7 +668,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     }
     walk.renderer().blitToScreen(fb_w, fb_h);
     drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, viewpoints,
-                measure, camera, t, fb_w, fb_h);
+                measure, environment, camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {
@@ -715,6 +725,7 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
                   "llvmpipe, impostor on GPUs; P cycles)")
       ->check(CLI::IsMember({"impostor", "tessellated", "off", "auto"}))
       ->capture_default_str();
+  addEnvironmentOptions(*cmd, args->environment);
   cmd->callback([args] { runView(*args); });
 }
 

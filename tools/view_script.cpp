@@ -28,7 +28,7 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
                                           "save-visibility", "restore", "move", "rotate", "scale",
                                           "explode", "comment", "drag", "section-at", "section",
                                           "section-offset", "save-viewpoint", "go-viewpoint",
-                                          "measure-at"};
+                                          "measure-at", "ocean", "sky"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
                                              "collapse", "hide-selection", "gizmo", "section-box",

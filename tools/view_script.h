@@ -25,6 +25,8 @@
 //   FRAME section X,Y,Z,NX,NY,NZ | section-offset METRES | section-box | section-clear
 // and the named viewpoints (view_viewpoints.h):
 //   FRAME save-viewpoint NAME | go-viewpoint NAME
+// and the setting (view_environment.h):
+//   FRAME ocean on|off | sky on|off
 // and measuring (view_measure.h):
 //   FRAME measure-at X Y (a snapped point; two give a distance, three an angle)
 //   FRAME measure-between | measure-centre-lines (the two selected objects) | measure-clear
