@@ -544,5 +544,41 @@ TEST(Viewer, MeasuringBetweenTwoPumpsMatchesTheCommandAndDrawsTheClosestPoints) 
   EXPECT_NE(run.log.find("measure: distance "), std::string::npos) << run.log;
 }
 
+// The ocean and the sky switched on in the viewer (its script, as the panel's checkboxes do): on
+// the X screen the background above the plant turns to sky and the lower part of the window to
+// water. The capture is kept as x-screen-ocean.png.
+TEST(Viewer, TheOceanAndTheSkyShowOnTheXScreen) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  const ScriptedRun run = runViewerScript(package, dir, "ocean", "60 ocean on\n61 sky on\n160 quit\n",
+                                          "ocean on", "sky on");
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  ASSERT_TRUE(run.before && run.after) << run.log;
+  writePngRgba(dir / "x-screen-ocean.png", run.after->width, run.after->height, run.after->rgba);
+  // Right of the review panel, the top rows (sky) and the bottom rows (water).
+  auto region = [](const test::ScreenImage& s, int y0, int y1, double& r, double& g, double& b) {
+    r = g = b = 0.0;
+    int n = 0;
+    for (int y = y0; y < y1; ++y)
+      for (int x = 700; x < 1000; x += 2, ++n) {
+        r += s.at(x, y)[0];
+        g += s.at(x, y)[1];
+        b += s.at(x, y)[2];
+      }
+    r /= n, g /= n, b /= n;
+  };
+  double r0, g0, b0, r1, g1, b1;
+  region(*run.before, 700, 760, r0, g0, b0);
+  region(*run.after, 700, 760, r1, g1, b1);
+  EXPECT_LT(r1 + g1 + b1, 0.6 * (r0 + g0 + b0)) << "deep water is darker than the background was";
+  EXPECT_GT(b1, r1 + 10.0) << "and blue";
+  region(*run.after, 250, 300, r1, g1, b1);
+  EXPECT_GT(b1, r1 + 20.0) << "the sky above the horizon is blue";
+  EXPECT_NE(run.log.find("ocean on (waterline 0.00 m, 8 waves)"), std::string::npos) << run.log;
+}
+
 }  // namespace
 }  // namespace tw
+

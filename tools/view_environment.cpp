@@ -5,6 +5,8 @@
 
 #include <imgui.h>
 
+#include "view_log.h"
+
 namespace tw {
 
 ViewEnvironment::ViewEnvironment(Walkthrough& walk, const std::optional<EnvironmentOptions>& initial,
@@ -21,11 +23,14 @@ ViewEnvironment::ViewEnvironment(Walkthrough& walk, const std::optional<Environm
 void ViewEnvironment::setOcean(bool on) {
   options_.ocean = on;
   apply();
+  viewSay("ocean %s (waterline %.2f m, %zu waves)", on ? "on" : "off", options_.grid.waterline_m,
+          options_.waves.waves.size());
 }
 
 void ViewEnvironment::setSky(bool on) {
   options_.sky = on;
   apply();
+  viewSay("sky %s", on ? "on" : "off");
 }
 
 void ViewEnvironment::apply() {
