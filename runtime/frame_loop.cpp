@@ -212,23 +212,58 @@ void Walkthrough::adaptTau(double frame_ms) {
 // One frame: the cut (and the prefetch cut ahead), then its clusters drawn with the frame's
 // occlusion mode, then the frame's statistics.
 FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
+  const double aspect = double(renderer_->width()) / double(renderer_->height());
+  return renderView(camera, camera, camera.projection(aspect), time_s, true);
+}
+
+FrameStats Walkthrough::renderStereoFrame(const Camera& camera, double time_s,
+                                          const StereoOptions& stereo,
+                                          std::vector<uint8_t>& left_rgba,
+                                          std::vector<uint8_t>& right_rgba) {
+  const double aspect = double(renderer_->width()) / double(renderer_->height());
+  const Camera cut_camera = stereoCutCamera(camera, aspect, stereo);
+  const StereoEye left = stereoEye(camera, aspect, stereo, -1);
+  const StereoEye right = stereoEye(camera, aspect, stereo, +1);
+  FrameStats stats = renderView(cut_camera, left.camera, left.projection, time_s, true);
+  renderer_->readColor(left_rgba, true);
+  const FrameStats second = renderView(cut_camera, right.camera, right.projection, time_s, false);
+  renderer_->readColor(right_rgba, true);
+  // One frame of the walkthrough: the cut and the pages once, the drawing twice.
+  stats.frame_ms += second.frame_ms;
+  stats.gpu_ms += second.gpu_ms;
+  stats.finish_ms += second.finish_ms;
+  stats.triangles_drawn += second.triangles_drawn;
+  stats.two_sided_triangles += second.two_sided_triangles;
+  stats.parametric_triangles += second.parametric_triangles;
+  stats.ocean_triangles += second.ocean_triangles;
+  return stats;
+}
+
+// A frame seen by `camera` through `projection`. With `new_cut`, the pager's frame starts and the
+// cut is selected for `cut_camera` (the same camera, or one whose frustum holds the eyes'); the
+// second eye of a stereo pair draws the first one's cut again and counts no frame.
+FrameStats Walkthrough::renderView(const Camera& cut_camera, const Camera& camera,
+                                   const glm::dmat4& projection, double time_s, bool new_cut) {
   const auto frame_start = Clock::now();
   FrameStats stats;
   stats.frame = frame_;
   stats.time_s = time_s;
   stats.tau_px = options_.reference ? 0.0 : tau_px_;
-  pager_->beginFrame(frame_ + 1);  // frame 0 of the pager was the start-up load
-  uploadReady(stats);
-
   const double aspect = double(renderer_->width()) / double(renderer_->height());
+  if (new_cut) {
+    pager_->beginFrame(frame_ + 1);  // frame 0 of the pager was the start-up load
+    uploadReady(stats);
+    near_reach_m_ = cut_camera.nearPlaneReach(aspect);
+    const auto cut_start = Clock::now();
+    if (!options_.reference)
+      selectCut(cut_camera, cut_camera.position - view_->origin(), aspect, time_s, stats);
+    stats.cpu_cut_ms = msSince(cut_start);
+  }
   const glm::dvec3 eye = camera.position - view_->origin();
-  near_reach_m_ = camera.nearPlaneReach(aspect);
-  const auto cut_start = Clock::now();
-  const std::vector<uint32_t>& cut_list =
-      options_.reference ? reference_clusters_ : selectCut(camera, eye, aspect, time_s, stats);
-  stats.cpu_cut_ms = msSince(cut_start);
+  const std::vector<uint32_t>& cut_list = options_.reference ? reference_clusters_ : cut_result_.clusters;
   // Every cluster of the cut stays in use (LRU), drawn or hidden: hidden ones may show next frame.
-  for (uint32_t c : cut_list) pager_->touch(view_->clusters()[c].page);
+  if (new_cut)
+    for (uint32_t c : cut_list) pager_->touch(view_->clusters()[c].page);
   uploadObjectStates();
   const std::vector<uint32_t>& parametric_cut =
       options_.reference ? all_parametric_ : cut_result_.parametric_clusters;
@@ -236,6 +271,8 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   const std::vector<uint32_t>& parametric_list =
       withOpaqueObjects(parametric_cut, shown_parametric_);
   rememberView(camera, eye, aspect, time_s, parametric_list);
+  last_projection_ = glm::mat4(projection);
+  last_position_ = cut_camera.position;  // the velocity of the walk, not of the eyes
 
   renderer_->beginFrame(last_rotation_, last_projection_);
   renderer_->setSections(sections_, eye);
@@ -252,7 +289,7 @@ FrameStats Walkthrough::renderFrame(const Camera& camera, double time_s) {
   }
   drawEnvironment(eye, time_s, &stats);
   drawGhostsAndOutlines(eye, cut_list, parametric_cut, stats);
-  finishFrame(frame_start, stats);
+  finishFrame(frame_start, stats, new_cut);
   return stats;
 }
 
@@ -491,7 +528,7 @@ void Walkthrough::drawWithoutHzb(OcclusionMode mode, const glm::dvec3& eye,
 }
 
 // Triangles drawn, GPU time, the pager's state and the frame's time; tau adapts to it.
-void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) {
+void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats, bool count_frame) {
   for (const DrawItem& item : items_) {
     stats.triangles_drawn += item.placement.triangle_count;
     if (!item.cull_back) stats.two_sided_triangles += item.placement.triangle_count;
@@ -522,6 +559,7 @@ void Walkthrough::finishFrame(Clock::time_point frame_start, FrameStats& stats) 
   stats.host_bytes_used = pager_stats.host_bytes_used;
   stats.rss_bytes = currentRssBytes();
   stats.frame_ms = msSince(frame_start);
+  if (!count_frame) return;
   if (!options_.reference) adaptTau(stats.frame_ms);
   ++frame_;
 }

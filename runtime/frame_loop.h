@@ -33,6 +33,7 @@
 #include "moved_objects_pass.h"
 #include "pager.h"
 #include "parametrics/parametric_renderer.h"
+#include "stereo.h"
 
 namespace tw {
 
@@ -76,6 +77,13 @@ class Walkthrough {
   // Renders one frame into the renderer's framebuffer. `time_s` is recorded in the stats and
   // drives the velocity estimate for prefetching.
   FrameStats renderFrame(const Camera& camera, double time_s);
+
+  // Stereo (stereo.h): the cut selected once, for a camera whose frustum holds both eyes, and
+  // drawn for the left eye then the right one; each eye's colour read back (RGBA, rows top-down)
+  // into its vector. The statistics are the left eye's frame with the right eye's drawing (its
+  // time and triangles) added. The renderer is left holding the right eye's frame.
+  FrameStats renderStereoFrame(const Camera& camera, double time_s, const StereoOptions& stereo,
+                               std::vector<uint8_t>& left_rgba, std::vector<uint8_t>& right_rgba);
 
   // Renders frames from `camera` until the cut holds what the view asks for (three frames in a
   // row with no page missing and no ancestor drawn instead), at most max_frames. Returns the last
@@ -132,6 +140,8 @@ class Walkthrough {
 
  private:
   void uploadReady(FrameStats& stats);
+  FrameStats renderView(const Camera& cut_camera, const Camera& camera, const glm::dmat4& projection,
+                        double time_s, bool new_cut);
   // The steps of renderFrame, in order.
   const std::vector<uint32_t>& selectCut(const Camera& camera, const glm::dvec3& eye, double aspect,
                                          double time_s, FrameStats& stats);
@@ -146,7 +156,9 @@ class Walkthrough {
   void drawGhostsAndOutlines(const glm::dvec3& eye, std::span<const uint32_t> mesh,
                              std::span<const uint32_t> parametric, FrameStats& stats);
   void drawGhostLists(const glm::dvec3& eye, FrameStats* stats);
-  void finishFrame(std::chrono::steady_clock::time_point frame_start, FrameStats& stats);
+  // `count_frame` false: the second eye of a stereo frame (tau and the frame count stay).
+  void finishFrame(std::chrono::steady_clock::time_point frame_start, FrameStats& stats,
+                   bool count_frame = true);
   // The object states uploaded if they changed; `clusters` without the ones that have no object
   // drawn opaque (in `kept`, returned), or `clusters` itself when every object is opaque.
   void uploadObjectStates();

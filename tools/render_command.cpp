@@ -84,14 +84,23 @@ struct RenderArgs {
   std::string viewpoint;  // FILE.bcfzip[#N]
   std::string changes;    // a change set (model.changes.json)
   std::string video;      // FILE.mp4|.mkv|.avi: the recorded frames as a video
+  std::string stereo = "off";  // stereo.h: off, side-by-side, top-bottom, anaglyph
+  double eye_separation_m = StereoOptions{}.eye_separation_m;
+  double zero_parallax_m = StereoOptions{}.zero_parallax_m;
 };
 
+// The recorded frame's picture: the renderer's colour, or a stereo pair put together.
+struct FrameImage {
+  std::vector<uint8_t> rgba;
+  int width = 0, height = 0;
+};
+
+// frame_NNNNN.png from `image`, and ids_NNNNN.png from the renderer (in stereo, the right eye's).
 void writeFramePngs(GlRenderer& renderer, const std::filesystem::path& dir, uint64_t index,
-                    std::vector<uint8_t>& rgba, std::vector<uint32_t>& ids) {
+                    const FrameImage& image, std::vector<uint32_t>& ids) {
   char name[64];
-  renderer.readColor(rgba, true);
   std::snprintf(name, sizeof name, "frame_%05llu.png", static_cast<unsigned long long>(index));
-  writePngRgba(dir / name, renderer.width(), renderer.height(), rgba);
+  writePngRgba(dir / name, image.width, image.height, image.rgba);
   renderer.readObjectIds(ids, true);
   std::snprintf(name, sizeof name, "ids_%05llu.png", static_cast<unsigned long long>(index));
   writePngRgba(dir / name, renderer.width(), renderer.height(), idsToRgba(ids));
@@ -156,6 +165,26 @@ void validateArgs(const RenderArgs& args) {
         "--soak-interval takes a positive number of seconds and --out DIR, without --png or "
         "--check-occlusion");
   validateReviewStateArgs(args.state);
+}
+
+// --stereo and its distances, checked against the frame size (halves must be whole).
+StereoOptions stereoOptions(const RenderArgs& args, int width, int height) {
+  StereoOptions stereo;
+  try {
+    stereo.mode = parseStereoMode(args.stereo);
+    stereo.eye_separation_m = args.eye_separation_m;
+    stereo.zero_parallax_m = args.zero_parallax_m;
+    validateStereo(stereo);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("--stereo: ") + e.what());
+  }
+  if ((stereo.mode == StereoMode::SideBySide && width % 2 != 0) ||
+      (stereo.mode == StereoMode::TopBottom && height % 2 != 0))
+    throw std::runtime_error("--stereo " + args.stereo + ": the frame must split into two equal halves; give an even " +
+                             (stereo.mode == StereoMode::SideBySide ? "width" : "height"));
+  if (stereo.mode != StereoMode::Off && args.check_occlusion)
+    throw std::runtime_error("--check-occlusion does not check stereo frames");
+  return stereo;
 }
 
 WalkthroughOptions walkthroughOptions(const RenderArgs& args, int width, int height) {
@@ -280,12 +309,10 @@ struct RenderedPath {
 
 // --video: each recorded frame, rendered settled (a film waits for its pages), goes to ffmpeg.
 // A failure (a full disk) stops the video but not the PNGs; it is reported at the end.
-void writeVideoFrame(VideoEncoder& video, Walkthrough& walk, std::vector<uint8_t>& rgba, bool have_rgba,
-                     RenderedPath& rendered) {
+void writeVideoFrame(VideoEncoder& video, const FrameImage& image, RenderedPath& rendered) {
   if (!rendered.video_error.empty()) return;
-  if (!have_rgba) walk.renderer().readColor(rgba, true);
   try {
-    video.write(rgba);
+    video.write(image.rgba);
     ++rendered.video_frames;
   } catch (const std::runtime_error& e) {
     rendered.video_error = e.what();
@@ -308,7 +335,8 @@ void reportLoadErrors(Walkthrough& walk, RenderedPath& rendered) {
 
 RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Walkthrough& walk,
                         const CameraPath& path, const Aabb& bounds, Clock::time_point open_start,
-                        OcclusionLossCheck& occlusion_check, VideoEncoder* video) {
+                        OcclusionLossCheck& occlusion_check, VideoEncoder* video,
+                        int frame_width, int frame_height, const StereoOptions& stereo) {
   Camera base;
   const double diagonal = glm::length(bounds.max - bounds.min);
   base.near_m = 0.05;
@@ -331,7 +359,11 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
   else
     rendered.frames.reserve(frames);
   const std::filesystem::path out_dir = args.out_dir;
-  std::vector<uint8_t> rgba;
+  FrameImage image;
+  std::vector<uint8_t> left, right;  // stereo: each eye's picture
+  int eye_width = 0, eye_height = 0;
+  stereoEyeSize(stereo.mode, frame_width, frame_height, eye_width, eye_height);
+  const double aspect = double(eye_width) / double(eye_height);
   std::vector<uint32_t> ids;
   const double t0 = path.keys.front().time_s;
   std::unique_ptr<Progress> progress;
@@ -350,14 +382,32 @@ RenderedPath renderPath(const RenderArgs& args, const GlobalOptions& global, Wal
       walk.renderFrame(path.sample(walk_t, base), walk_t);
       ++rendered.walk_frames;
     }
-    FrameStats stats = still || video ? walk.renderSettled(path.sample(t, base), nullptr, 200, t)
-                                      : walk.renderFrame(path.sample(t, base), t);
+    const Camera camera = path.sample(t, base);
+    FrameStats stats;
+    if (stereo.mode == StereoMode::Off) {
+      stats = still || video ? walk.renderSettled(camera, nullptr, 200, t) : walk.renderFrame(camera, t);
+    } else {
+      // Stills and films wait for the pages of the eyes' shared cut, then draw both eyes.
+      if (still || video) walk.renderSettled(stereoCutCamera(camera, aspect, stereo), nullptr, 200, t);
+      stats = walk.renderStereoFrame(camera, t, stereo, left, right);
+    }
     stats.frame = uint64_t(i);  // the recorded sequence, as the PNG names count
     reportLoadErrors(walk, rendered);
     if (i == 0) rendered.first_frame_ms = msSince(open_start);
-    if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), rgba, ids);
+    if (args.png || video) {
+      if (stereo.mode == StereoMode::Off) {
+        walk.renderer().readColor(image.rgba, true);
+        image.width = eye_width;
+        image.height = eye_height;
+      } else {
+        composeStereo(stereo.mode, eye_width, eye_height, left, right, image.rgba);
+        image.width = stereo.mode == StereoMode::SideBySide ? 2 * eye_width : eye_width;
+        image.height = stereo.mode == StereoMode::TopBottom ? 2 * eye_height : eye_height;
+      }
+    }
+    if (args.png) writeFramePngs(walk.renderer(), out_dir, uint64_t(i), image, ids);
     if (video) {
-      writeVideoFrame(*video, walk, rgba, args.png, rendered);
+      writeVideoFrame(*video, image, rendered);
       if (!rendered.video_error.empty() && !args.png) break;
       if (progress) progress->update(uint64_t(i + 1));
     }
@@ -390,7 +440,8 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
                              const RenderedPath& rendered, const RenderTimes& times) {
   const std::vector<FrameStats>& all = rendered.frames;
   const int frames = int(all.size());
-  const int width = options.width, height = options.height;
+  int width = 0, height = 0;  // the frame's (in stereo, both eyes')
+  parseImageSize(args.size, "--size", width, height);
   const double context_ms = times.context_ms, open_ms = times.open_ms;
   const double first_frame_ms = rendered.first_frame_ms;
   const uint64_t walk_frames = rendered.walk_frames;
@@ -461,6 +512,9 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"peak_rss_bytes", peak_rss},
       {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
       {"host_budget_bytes", options.pager.host_budget_bytes},
+      {"stereo", args.stereo},
+      {"eye_width", options.width},
+      {"eye_height", options.height},
       {"video", args.video},
       {"video_frames", rendered.video_frames},
       {"ocean", args.environment.ocean},
@@ -490,13 +544,17 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
   validateArgs(args);
+  const StereoOptions stereo = stereoOptions(args, width, height);
   if (!args.out_dir.empty()) std::filesystem::create_directories(args.out_dir);
 
   RenderTimes times;
   const auto start = Clock::now();
   EglContext context;
   times.context_ms = msSince(start);
-  const WalkthroughOptions options = walkthroughOptions(args, width, height);
+  // In stereo the walkthrough draws one eye at a time, at the eye's size.
+  int eye_width = 0, eye_height = 0;
+  stereoEyeSize(stereo.mode, width, height, eye_width, eye_height);
+  const WalkthroughOptions options = walkthroughOptions(args, eye_width, eye_height);
   const auto open_start = Clock::now();
   Walkthrough walk(args.file, options);
   times.open_ms = msSince(open_start);
@@ -530,7 +588,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   std::optional<VideoEncoder> video;
   if (!args.video.empty()) video.emplace(args.video, width, height, args.fps);
   RenderedPath rendered = renderPath(args, global, walk, path, bounds, open_start, occlusion_check,
-                                     video ? &*video : nullptr);
+                                     video ? &*video : nullptr, width, height, stereo);
   if (video && rendered.video_error.empty()) {
     try {
       video->finish();
@@ -649,6 +707,15 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
   addReviewStateOptions(*cmd, args->state);
   addEnvironmentOptions(*cmd, args->environment);
+  cmd->add_option("--stereo", args->stereo,
+                  "Two eyes: off, side-by-side, top-bottom, anaglyph (red-cyan); --size is the "
+                  "whole frame")
+      ->capture_default_str();
+  cmd->add_option("--eye-separation", args->eye_separation_m, "Stereo: between the eyes, metres")
+      ->capture_default_str();
+  cmd->add_option("--zero-parallax", args->zero_parallax_m,
+                  "Stereo: distance at which both eyes' images coincide, metres")
+      ->capture_default_str();
   cmd->add_option("--video", args->video,
                   "Write the recorded frames as a video at --fps (FILE.mp4 or .mkv: H.264; .avi: "
                   "MJPEG), each frame rendered settled; needs ffmpeg");

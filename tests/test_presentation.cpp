@@ -1,5 +1,6 @@
-// The setting and the video through the command a user runs: the ocean and the sky drawn around
-// the generated plant as "no object", and `render --video` read back by ffprobe.
+// Presentation through the command a user runs: the ocean and the sky drawn around the generated
+// plant as "no object", stereo pairs whose eyes see a plate shifted as their separation says, and
+// `render --video` read back by ffprobe.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -12,6 +13,7 @@
 #include "generated_plant_support.h"
 #include "image_compare.h"
 #include "package_view.h"
+#include "stereo.h"
 #include "test_support.h"
 
 namespace tw {
@@ -89,6 +91,58 @@ TEST(Environment, TheOceanAndTheSkyAreNoObjectAndLeaveEverythingAboveTheHorizonA
   EXPECT_GT(covered, 200u) << "the hull below the waterline is behind the water";
   EXPECT_GT(water, size_t(kWidth) * 10) << "the ocean reaches the bottom of the frame";
   EXPECT_EQ(background_left, 0u) << "the sky and the ocean fill all the background";
+}
+
+// A 4 m plate 20 m ahead, eyes 1 m apart converging at 10 m: in a side-by-side frame the plate's
+// centre lies P00 * s * (1/D - 1/d) apart in normalized device units between the halves (the
+// right eye sees it further right: behind the zero-parallax plane the disparity is uncrossed),
+// and at d = D the halves are the same picture.
+TEST(Stereo, ASideBySideFrameShiftsAPlateByTheEyeSeparation) {
+  const fs::path dir = test::scratchDir();
+  test::writeFile(dir / "plate.obj", "v -2 0 -2\nv 2 0 -2\nv 2 0 2\nv -2 0 2\nf 1 2 3\nf 1 3 4\n");
+  ASSERT_EQ(test::runTerawalk("preprocess --quiet " + (dir / "plate.obj").string() + " -o " + (dir / "plate.twk").string()).exit_code, 0);
+  constexpr int kEyeWidth = 200, kEyeHeight = 150;
+  const double separation = 1.0, zero_parallax = 10.0;
+  for (const double distance : {20.0, 10.0}) {
+    SCOPED_TRACE(distance);
+    Camera camera;
+    camera.position = {0.0, -distance, 0.0};
+    camera.lookAt({0.0, 0.0, 0.0});
+    CameraPath still;
+    still.keys.push_back({0.0, camera});
+    writeCameraPath(still, dir / "plate.path");
+    const fs::path out = dir / ("sbs" + std::to_string(int(distance)));
+    const test::CommandResult r = test::runTerawalk(
+        "render --quiet " + (dir / "plate.twk").string() + " --path " + (dir / "plate.path").string() +
+        " --size " + std::to_string(2 * kEyeWidth) + "x" + std::to_string(kEyeHeight) +
+        " --stereo side-by-side --eye-separation 1 --zero-parallax 10 --png --out " + out.string());
+    ASSERT_EQ(r.exit_code, 0) << r.output;
+    const RgbaImage frame = readPngRgba(out / "frame_00000.png");
+    ASSERT_EQ(frame.width, 2 * kEyeWidth);
+    // The plate's pixels (not the background's colour, taken at a corner) in each half.
+    auto centre = [&](int x0) {
+      const uint8_t* bg = &frame.rgba[0];
+      double sum = 0.0;
+      int n = 0;
+      for (int y = 0; y < kEyeHeight; ++y)
+        for (int x = x0; x < x0 + kEyeWidth; ++x) {
+          const uint8_t* p = &frame.rgba[4 * (size_t(y) * frame.width + x)];
+          if (std::abs(p[0] - bg[0]) + std::abs(p[1] - bg[1]) + std::abs(p[2] - bg[2]) > 30) {
+            sum += x - x0 + 0.5;
+            ++n;
+          }
+        }
+      EXPECT_GT(n, 400);
+      return n > 0 ? sum / n : 0.0;
+    };
+    const double left = centre(0), right = centre(kEyeWidth);
+    const double p00 = camera.projection(double(kEyeWidth) / kEyeHeight)[0][0];
+    const double expected_px = p00 * separation * (1.0 / zero_parallax - 1.0 / distance) * 0.5 * kEyeWidth;
+    EXPECT_NEAR(right - left, expected_px, 0.5) << "left " << left << ", right " << right;
+    if (distance == zero_parallax) {
+      EXPECT_NEAR(left, right, 0.25);
+    }
+  }
 }
 
 struct Probe {
