@@ -579,6 +579,40 @@ TEST(Viewer, TheOceanAndTheSkyShowOnTheXScreen) {
   EXPECT_NE(run.log.find("ocean on (waterline 0.00 m, 8 waves)"), std::string::npos) << run.log;
 }
 
+// Stereo in the window, top and bottom: on the X screen the two halves show the plant from the
+// two eyes. With the eyes together the halves are the same picture; a metre apart, they differ.
+TEST(Viewer, TopAndBottomStereoShowsBothEyesOnTheXScreen) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  auto halvesDiffer = [&](const std::string& name, const std::string& separation) {
+    const auto script_file = dir / (name + ".script");
+    test::writeFile(script_file, "");
+    test::XvfbScreen screen(dir / ("x-" + name), 1024, 768);
+    test::BackgroundProcess viewer({TW_TERAWALK_EXE, "view", package.string(), "--size", "1024x768",
+                                    "--frames", "60", "--stereo", "top-bottom", "--eye-separation",
+                                    separation, "--zero-parallax", "20"},
+                                   {"DISPLAY=" + screen.display()}, dir / (name + ".log"));
+    std::optional<test::ScreenImage> last;
+    while (viewer.running()) {
+      if (auto capture = screen.capture(); capture && windowDrawn(*capture, 1024, 768)) last = std::move(capture);
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    }
+    EXPECT_EQ(viewer.wait(), 0) << test::readFile(dir / (name + ".log"));
+    EXPECT_TRUE(last.has_value());
+    if (!last) return -1;
+    writePngRgba(dir / ("x-screen-" + name + ".png"), last->width, last->height, last->rgba);
+    // Right of the review panel and of the pointer, below the statistics: the top half's rows
+    // against the bottom half's.
+    int differing = 0;
+    for (int y = 210; y < 384; ++y)
+      for (int x = 540; x < 900; ++x) differing += std::memcmp(last->at(x, y), last->at(x, y + 384), 3) != 0;
+    return differing;
+  };
+  EXPECT_EQ(halvesDiffer("together", "0"), 0);
+  EXPECT_GT(halvesDiffer("apart", "1"), 200);
+}
+
 }  // namespace
 }  // namespace tw
-

@@ -43,6 +43,7 @@
 #include "section_planes.h"
 #include "view_edits.h"
 #include "view_environment.h"
+#include "view_stereo.h"
 #include "view_measure.h"
 #include "view_sections.h"
 #include "view_viewpoints.h"
@@ -69,6 +70,8 @@ struct ViewArgs {
   std::string db;      // the project database, for the properties panel
   std::string script;  // clicks and keys at given frames (view_script.h)
   EnvironmentArgs environment;  // --ocean, --sky and their settings
+  std::string stereo_mode = "off";
+  StereoOptions stereo;  // from stereo_mode and the two distances, checked by runView
 };
 
 struct GlfwSession {
@@ -177,6 +180,9 @@ struct ViewSettings {
   float min_feature = 1.0f;
   int occlusion_mode = 0;
   int parametric_mode = 0;
+  int stereo_mode = 0;  // StereoMode
+  float eye_separation_m = 0.065f;
+  float zero_parallax_m = 10.0f;
 };
 
 // Keys that act once per press (not while held), unless the overlay has the keyboard.
@@ -260,6 +266,15 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
                 int(ParametricMode::Off) == 2, "the combo lists the modes in enum order");
   const char* const parametric_names[] = {"impostor", "tessellated", "off"};
   ImGui::Combo("parametrics [P]", &settings.parametric_mode, parametric_names, 3);
+  static_assert(int(StereoMode::Off) == 0 && int(StereoMode::SideBySide) == 1 &&
+                int(StereoMode::TopBottom) == 2 && int(StereoMode::Anaglyph) == 3,
+                "the combo lists the modes in enum order");
+  const char* const stereo_names[] = {"off", "side by side", "top and bottom", "anaglyph (red-cyan)"};
+  ImGui::Combo("stereo", &settings.stereo_mode, stereo_names, 4);
+  ImGui::SliderFloat("eye separation (m)", &settings.eye_separation_m, 0.0f, 5.0f, "%.3f",
+                     ImGuiSliderFlags_Logarithmic);
+  ImGui::SliderFloat("zero parallax (m)", &settings.zero_parallax_m, 0.5f, 1000.0f, "%.1f",
+                     ImGuiSliderFlags_Logarithmic);
   ImGui::Text("%s  speed %.1f m/s   [O] orbit  [R] record%s  [F12] screenshot",
               nav.orbit ? "orbit" : "walk", nav.speed_mps, recording ? " (on)" : "");
   ImGui::End();
@@ -509,6 +524,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   settings.far_m = float(camera.far_m);
   settings.occlusion_mode = static_cast<int>(options.occlusion);
   settings.parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
+  settings.stereo_mode = static_cast<int>(args.stereo.mode);
+  settings.eye_separation_m = float(args.stereo.eye_separation_m);
+  settings.zero_parallax_m = float(args.stereo.zero_parallax_m);
+  ViewStereo stereo_screen;
   int shot = 0;
   KeyPresses keys(window);
   ViewSelection selection(walk.package(), walk.objectStates(), db);
@@ -568,14 +587,22 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
 
     int fb_w = 0, fb_h = 0;
     glfwGetFramebufferSize(window, &fb_w, &fb_h);
-    if (fb_w > 0 && fb_h > 0 && (fb_w != walk.renderer().width() || fb_h != walk.renderer().height()))
-      walk.renderer().resize(fb_w, fb_h);
+    // In stereo the renderer draws one eye at a time, at the eye's size.
+    StereoOptions stereo;
+    stereo.mode = static_cast<StereoMode>(settings.stereo_mode);
+    stereo.eye_separation_m = settings.eye_separation_m;
+    stereo.zero_parallax_m = std::max(0.01f, settings.zero_parallax_m);
+    int eye_w = fb_w, eye_h = fb_h;
+    stereoEyeSize(stereo.mode, fb_w, fb_h, eye_w, eye_h);
+    if (eye_w > 0 && eye_h > 0 && (eye_w != walk.renderer().width() || eye_h != walk.renderer().height()))
+      walk.renderer().resize(eye_w, eye_h);
     if (options.target_fps <= 0.0) walk.setTau(settings.tau);
     walk.setMinFeaturePx(settings.min_feature);
     walk.setOcclusion(static_cast<OcclusionMode>(settings.occlusion_mode));
     walk.setParametrics(static_cast<ParametricMode>(settings.parametric_mode));
     edits.update(t);
-    stats = walk.renderFrame(camera, t);
+    stats = stereo.mode == StereoMode::Off ? walk.renderFrame(camera, t)
+                                           : stereo_screen.render(walk, camera, t, stereo);
     settings.tau = float(walk.tau());
 
     // Clicks pick in the frame just drawn, from the mouse and from the script.
@@ -599,7 +626,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       mouse_was_down = down;
     }
     auto pickAt = [&](int x, int y, bool ctrl, bool twice) {
-      const int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
+      int px = win_w > 0 ? x * fb_w / win_w : x, py = win_h > 0 ? y * fb_h / win_h : y;
+      // In stereo the ids are the right eye's: a click picks at the same place of its eye.
+      if (stereo.mode == StereoMode::SideBySide && eye_w > 0) px %= eye_w;
+      if (stereo.mode == StereoMode::TopBottom && eye_h > 0) py %= eye_h;
       if (px < 0 || py < 0 || px >= walk.renderer().width() || py >= walk.renderer().height())
         return;
       if (measure.on()) {  // M: clicks place measure points
@@ -666,7 +696,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
       std::snprintf(name, sizeof name, "terawalk-%03d.png", shot++);
       saveScreenshot(walk.renderer(), name);
     }
-    walk.renderer().blitToScreen(fb_w, fb_h);
+    if (stereo.mode == StereoMode::Off)
+      walk.renderer().blitToScreen(fb_w, fb_h);
+    else
+      stereo_screen.present(fb_w, fb_h);
     drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, viewpoints,
                 measure, environment, camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
@@ -681,9 +714,15 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   glfwSetWindowUserPointer(window, nullptr);
 }
 
-void runView(const ViewArgs& args) {
+void runView(ViewArgs args) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
+  try {
+    args.stereo.mode = parseStereoMode(args.stereo_mode);
+    validateStereo(args.stereo);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(std::string("--stereo: ") + e.what());
+  }
   GlfwSession glfw;
   ViewerWindow window(width, height);
   const WalkthroughOptions options = viewOptions(args, window.get());
@@ -726,6 +765,15 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::IsMember({"impostor", "tessellated", "off", "auto"}))
       ->capture_default_str();
   addEnvironmentOptions(*cmd, args->environment);
+  cmd->add_option("--stereo", args->stereo_mode,
+                  "Stereo at start: off, side-by-side, top-bottom, anaglyph (the Settings panel "
+                  "changes it, the eye separation and the zero-parallax distance)")
+      ->capture_default_str();
+  cmd->add_option("--eye-separation", args->stereo.eye_separation_m, "Stereo: between the eyes, metres")
+      ->capture_default_str();
+  cmd->add_option("--zero-parallax", args->stereo.zero_parallax_m,
+                  "Stereo: distance at which both eyes' images coincide, metres")
+      ->capture_default_str();
   cmd->callback([args] { runView(*args); });
 }
 
