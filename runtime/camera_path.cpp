@@ -359,4 +359,92 @@ CameraPath generateRandomWalkPath(const Aabb& bounds, int frames, double fps, ui
   return path;
 }
 
+namespace {
+
+// A camera's angles as numbers a spline can pass through: yaw unwrapped against the previous key.
+struct SmoothKey {
+  double time_s;
+  glm::dvec3 position;
+  double yaw, pitch, fov;
+};
+
+// The mean of the keys within [t - half, t + half], yaw unwrapped around `near_yaw`.
+SmoothKey meanAround(const CameraPath& path, double t, double half, double near_yaw) {
+  SmoothKey mean{t, glm::dvec3(0.0), 0.0, 0.0, 0.0};
+  int n = 0;
+  const glm::dvec3 anchor = path.keys.front().camera.position;  // keeps plant coordinates exact
+  for (const CameraKey& k : path.keys) {
+    if (k.time_s < t - half || k.time_s > t + half) continue;
+    mean.position += k.camera.position - anchor;
+    mean.yaw += near_yaw + std::remainder(k.camera.yaw_rad - near_yaw, 2.0 * std::numbers::pi);
+    mean.pitch += k.camera.pitch_rad;
+    mean.fov += k.camera.fov_y_rad;
+    ++n;
+  }
+  if (n == 0) {  // a gap in the recording: the path's own interpolation
+    const Camera c = path.sample(t);
+    return {t, c.position, near_yaw + std::remainder(c.yaw_rad - near_yaw, 2.0 * std::numbers::pi), c.pitch_rad,
+            c.fov_y_rad};
+  }
+  mean.position = anchor + mean.position / double(n);
+  mean.yaw /= n;
+  mean.pitch /= n;
+  mean.fov /= n;
+  return mean;
+}
+
+// Uniform Catmull-Rom through p1..p2 with neighbours p0, p3, at s in [0, 1].
+double catmullRom(double p0, double p1, double p2, double p3, double s) {
+  return 0.5 * ((2.0 * p1) + (-p0 + p2) * s + (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3) * s * s +
+                (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * s * s * s);
+}
+
+}  // namespace
+
+CameraPath smoothCameraPath(const CameraPath& path, double key_interval_s, double fps) {
+  if (!(key_interval_s > 0.0) || !(fps > 0.0) || !std::isfinite(key_interval_s) || !std::isfinite(fps))
+    throw std::invalid_argument("smoothing a path needs an interval and a rate above 0");
+  if (path.keys.size() < 2) return path;
+  const double t0 = path.keys.front().time_s, t1 = path.keys.back().time_s;
+  if ((t1 - t0) * fps > 1e7) throw std::invalid_argument("the smoothed path would have more than 10^7 keys");
+  // Control keys: the ends as recorded, the mean of the walk every interval between them.
+  std::vector<SmoothKey> control;
+  auto exact = [](const CameraKey& k, double near_yaw) {
+    return SmoothKey{k.time_s, k.camera.position,
+                     near_yaw + std::remainder(k.camera.yaw_rad - near_yaw, 2.0 * std::numbers::pi),
+                     k.camera.pitch_rad, k.camera.fov_y_rad};
+  };
+  control.push_back(exact(path.keys.front(), path.keys.front().camera.yaw_rad));
+  const int inner = std::max(0, int(std::ceil((t1 - t0) / key_interval_s)) - 1);
+  const double step = (t1 - t0) / (inner + 1);
+  for (int i = 1; i <= inner; ++i) control.push_back(meanAround(path, t0 + i * step, 0.5 * step, control.back().yaw));
+  control.push_back(exact(path.keys.back(), control.back().yaw));
+
+  CameraPath out;
+  const int frames = int(std::floor((t1 - t0) * fps + 1e-9)) + 1;
+  out.keys.reserve(size_t(frames));
+  const glm::dvec3 anchor = control.front().position;
+  for (int f = 0; f < frames; ++f) {
+    const double t = std::min(t1, t0 + f / fps);
+    const size_t i = std::min(size_t((t - t0) / step), control.size() - 2);
+    const double s = std::clamp((t - control[i].time_s) / (control[i + 1].time_s - control[i].time_s), 0.0, 1.0);
+    const SmoothKey& p0 = control[i == 0 ? 0 : i - 1];
+    const SmoothKey& p1 = control[i];
+    const SmoothKey& p2 = control[i + 1];
+    const SmoothKey& p3 = control[std::min(i + 2, control.size() - 1)];
+    auto along = [&](auto get) { return catmullRom(get(p0), get(p1), get(p2), get(p3), s); };
+    CameraKey key;
+    key.time_s = t;
+    key.camera.position = anchor + glm::dvec3(along([&](const SmoothKey& k) { return k.position.x - anchor.x; }),
+                                              along([&](const SmoothKey& k) { return k.position.y - anchor.y; }),
+                                              along([&](const SmoothKey& k) { return k.position.z - anchor.z; }));
+    key.camera.yaw_rad = std::remainder(along([](const SmoothKey& k) { return k.yaw; }), 2.0 * std::numbers::pi);
+    key.camera.pitch_rad = std::clamp(along([](const SmoothKey& k) { return k.pitch; }), -1.55, 1.55);
+    key.camera.fov_y_rad = std::clamp(along([](const SmoothKey& k) { return k.fov; }), 0.01, 3.1);
+    if (!out.keys.empty() && key.time_s <= out.keys.back().time_s) continue;  // times strictly increase
+    out.keys.push_back(key);
+  }
+  return out;
+}
+
 }  // namespace tw

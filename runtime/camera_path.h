@@ -51,4 +51,12 @@ CameraPath generateFlythroughPath(const Aabb& bounds, int frames, double fps = 3
 CameraPath generateRandomWalkPath(const Aabb& bounds, int frames, double fps = 30.0,
                                   uint64_t seed = 1);
 
+// A steadier path along the same walk, for a film from a recorded one: control keys every
+// `key_interval_s` (each the mean of the recorded keys within half an interval of it, so hand
+// jitter averages out; the first and last keys kept as they are), then a Catmull-Rom spline
+// through them for the position and for yaw (unwrapped), pitch and field of view, sampled `fps`
+// times a second from the first key's time to the last's. Throws std::invalid_argument for an
+// interval or rate not above 0, or more than 10^7 keys out.
+CameraPath smoothCameraPath(const CameraPath& path, double key_interval_s, double fps);
+
 }  // namespace tw

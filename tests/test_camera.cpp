@@ -511,5 +511,40 @@ TEST(CameraPath, RandomWalkTeleportsFliesTurnsAndWalksInsideTheModel) {
   EXPECT_NE(other.keys.back().camera.position, path.keys.back().camera.position);
 }
 
+// A walk recorded by hand (a straight line at 1.5 m/s, 30 keys a second, jittered by up to 5 cm
+// and 2 degrees): the smoothed path keeps its ends and its time, lies within a few centimetres of
+// the line (under a fifth of the jitter) and keeps its heading.
+TEST(CameraPath, SmoothingAWalkAveragesItsJitterAndKeepsItsEnds) {
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> jitter(-1.0, 1.0);
+  CameraPath walk;
+  for (int i = 0; i <= 300; ++i) {
+    CameraKey key;
+    key.time_s = i / 30.0;
+    key.camera.position = glm::dvec3(500000.0 + 1.5 * key.time_s, 7000000.0, 12.0) +
+                          0.05 * glm::dvec3(jitter(random), jitter(random), jitter(random));
+    key.camera.yaw_rad = glm::radians(179.0 + 2.0 * jitter(random));  // across the +-180 seam
+    key.camera.fov_y_rad = glm::radians(60.0);
+    walk.keys.push_back(key);
+  }
+  const CameraPath smooth = smoothCameraPath(walk, 1.0, 25.0);
+  ASSERT_EQ(smooth.keys.size(), 251u);  // 10 s at 25 a second
+  EXPECT_EQ(smooth.keys.front().camera.position, walk.keys.front().camera.position);
+  EXPECT_EQ(smooth.keys.back().camera.position, walk.keys.back().camera.position);
+  EXPECT_DOUBLE_EQ(smooth.keys.back().time_s, 10.0);
+  double worst_off_line = 0.0, worst_raw = 0.0, worst_yaw = 0.0;
+  for (const CameraKey& k : smooth.keys) {
+    if (k.time_s < 1.0 || k.time_s > 9.0) continue;  // the ends keep their recorded jitter
+    const glm::dvec3 on_line(500000.0 + 1.5 * k.time_s, 7000000.0, 12.0);
+    worst_off_line = std::max(worst_off_line, glm::length(k.camera.position - on_line));
+    worst_yaw = std::max(worst_yaw, std::abs(std::remainder(k.camera.yaw_rad - glm::radians(179.0), 2.0 * std::numbers::pi)));
+  }
+  for (const CameraKey& k : walk.keys)
+    worst_raw = std::max(worst_raw, glm::length(k.camera.position - glm::dvec3(500000.0 + 1.5 * k.time_s, 7000000.0, 12.0)));
+  EXPECT_LT(worst_off_line, 0.2 * worst_raw) << worst_off_line << " m against " << worst_raw << " m";
+  EXPECT_LT(worst_yaw, glm::radians(0.5)) << "yaw stays by 179 degrees, across the seam";
+  EXPECT_THROW(smoothCameraPath(walk, 0.0, 25.0), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace tw

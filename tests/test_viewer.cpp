@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "camera.h"
+#include "camera_path.h"
 #include "image_compare.h"
 #include "package_view.h"
 #include "generated_plant_support.h"
@@ -612,6 +613,48 @@ TEST(Viewer, TopAndBottomStereoShowsBothEyesOnTheXScreen) {
   };
   EXPECT_EQ(halvesDiffer("together", "0"), 0);
   EXPECT_GT(halvesDiffer("apart", "1"), 200);
+}
+
+// The path player, as a reviewer drives it through the Path panel (here its script): an orbit
+// paused and moved along with the time slider shows the plant from another side on the X
+// screen; smoothed and written, the path reads back with its keys 1/30 s apart.
+TEST(Viewer, APathPausedAndSoughtMovesTheCameraAndIsWrittenSmoothed) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  const auto package = dir / "plant.twk";
+  std::filesystem::copy_file(test::generatedPlant().package, package);
+  const auto orbit = dir / "orbit.path";
+  ASSERT_EQ(test::runTerawalk("render --quiet " + package.string() + " --orbit 120 --max-frames 1 --size 64x64 --save-path " +
+                              orbit.string()).exit_code, 0);
+  const auto smoothed = dir / "smooth.path";
+  const auto script_file = dir / "path.script";
+  test::writeFile(script_file, "5 path-pause\n10 path-seek 0.5\n70 path-seek 2.5\n75 path-smooth 0.5\n76 path-save " +
+                                   smoothed.string() + "\n140 quit\n");
+  const auto log_file = dir / "path.log";
+  test::XvfbScreen screen(dir / "x-path", 1024, 768);
+  test::BackgroundProcess viewer({TW_TERAWALK_EXE, "view", package.string(), "--size", "1024x768", "--path",
+                                  orbit.string(), "--script", script_file.string()},
+                                 {"DISPLAY=" + screen.display()}, log_file);
+  std::optional<test::ScreenImage> at_half, at_two_and_half;
+  while (viewer.running()) {
+    const std::string log = test::readFile(log_file);
+    auto capture = screen.capture();
+    if (capture && windowDrawn(*capture, 1024, 768)) {
+      if (log.find("path at 2.50") != std::string::npos) at_two_and_half = std::move(capture);
+      else if (log.find("path at 0.50") != std::string::npos) at_half = std::move(capture);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  }
+  ASSERT_EQ(viewer.wait(), 0) << test::readFile(log_file);
+  ASSERT_TRUE(at_half && at_two_and_half) << test::readFile(log_file);
+  int differing = 0;  // right of the review panel, below the statistics
+  for (int y = 210; y < 760; ++y)
+    for (int x = 460; x < 1020; ++x) differing += std::memcmp(at_half->at(x, y), at_two_and_half->at(x, y), 3) != 0;
+  EXPECT_GT(differing, 2000) << "the camera moved along the orbit";
+  const CameraPath written = readCameraPath(smoothed);
+  ASSERT_GT(written.keys.size(), 100u);
+  EXPECT_NEAR(written.keys[1].time_s - written.keys[0].time_s, 1.0 / 30.0, 1e-9);
+  EXPECT_NE(test::readFile(log_file).find("path smoothed: 120 keys to"), std::string::npos);
 }
 
 }  // namespace

@@ -34,5 +34,6 @@ void registerFindCommand(CLI::App& app, const GlobalOptions& global);
 void registerMeasureCommand(CLI::App& app, const GlobalOptions& global);
 void registerBcfCommand(CLI::App& app, const GlobalOptions& global);
 void registerChangesCommand(CLI::App& app, const GlobalOptions& global);
+void registerPathCommand(CLI::App& app, const GlobalOptions& global);
 
 }  // namespace tw

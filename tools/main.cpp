@@ -25,6 +25,7 @@ int main(int argc, char** argv) {
   tw::registerFindCommand(app, global);
   tw::registerBcfCommand(app, global);
   tw::registerChangesCommand(app, global);
+  tw::registerPathCommand(app, global);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

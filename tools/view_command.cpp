@@ -43,6 +43,7 @@
 #include "section_planes.h"
 #include "view_edits.h"
 #include "view_environment.h"
+#include "view_path.h"
 #include "view_stereo.h"
 #include "view_measure.h"
 #include "view_sections.h"
@@ -285,8 +286,9 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
 void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigator& nav,
                  bool recording, const ViewSelection& selection, ViewReview& review,
                  ViewEdits& edits, ViewSections& sections, ViewViewpoints& viewpoints,
-                 ViewMeasure& measure, ViewEnvironment& environment, Camera& camera, double now_s,
-                 int window_width, int window_height) {
+                 ViewMeasure& measure, ViewEnvironment& environment, ViewPath& player,
+                 const CameraPath& recorded, Camera& camera, double now_s, int window_width,
+                 int window_height) {
   ImGui_ImplOpenGL3_NewFrame();
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
@@ -297,6 +299,7 @@ void drawOverlay(const FrameStats& stats, ViewSettings& settings, const Navigato
   sections.drawPanel();
   measure.drawPanel();
   environment.drawPanel();
+  player.drawPanel(recorded);
   measure.draw(camera, window_width, window_height);
   const Camera current = camera;
   viewpoints.drawPanel(camera, current);
@@ -517,6 +520,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   if (!replay.keys.empty()) camera = replay.sample(replay.keys.front().time_s, camera);
 
   PathRecorder recorder;
+  ViewPath player;
+  player.load(replay, args.path_file);
   ViewSettings settings;
   settings.tau = float(walk.tau());
   settings.fov_deg = float(glm::degrees(camera.fov_y_rad));
@@ -574,12 +579,10 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     };
     if (keys.pressed(GLFW_KEY_ESCAPE)) escape();
 
-    if (!replay.keys.empty()) {
-      const double span = std::max(replay.durationS(), 1e-6);
-      camera = replay.sample(replay.keys.front().time_s + std::fmod(t, span), camera);
-    } else {
+    if (player.following())
+      player.update(dt, camera);
+    else
       nav.update(window, camera, dt, edits.capturing());
-    }
     camera.fov_y_rad = glm::radians(double(settings.fov_deg));
     camera.near_m = settings.near_m;
     camera.far_m = settings.far_m;
@@ -665,6 +668,16 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
             measure.between(true);
           else if (e.action == "measure-clear")
             measure.clear();
+          else if (e.action == "path-play")
+            player.play();
+          else if (e.action == "path-pause")
+            player.pause();
+          else if (e.action == "path-seek")
+            player.seek(std::atof(e.text.c_str()));
+          else if (e.action == "path-smooth")
+            player.smooth(std::atof(e.text.c_str()));
+          else if (e.action == "path-save")
+            player.save(e.text);
           else if (e.action == "ocean")
             environment.setOcean(e.text == "on");
           else if (e.action == "sky")
@@ -701,7 +714,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     else
       stereo_screen.present(fb_w, fb_h);
     drawOverlay(stats, settings, nav, recorder.on, selection, review, edits, sections, viewpoints,
-                measure, environment, camera, t, fb_w, fb_h);
+                measure, environment, player, recorder.path, camera, t, fb_w, fb_h);
     glfwSwapBuffers(window);
 
     if (quit || (args.frames > 0 && frame + 1 >= args.frames)) {

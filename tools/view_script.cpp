@@ -28,12 +28,14 @@ bool reviewActionTakesText(const std::string& action, bool& takes_text) {
                                           "save-visibility", "restore", "move", "rotate", "scale",
                                           "explode", "comment", "drag", "section-at", "section",
                                           "section-offset", "save-viewpoint", "go-viewpoint",
-                                          "measure-at", "ocean", "sky"};
+                                          "measure-at", "ocean", "sky", "path-seek",
+                                          "path-smooth", "path-save"};
   static const char* const without_text[] = {"show-all", "select-results", "isolate-results",
                                              "zoom-results", "undo", "redo", "save-changes",
                                              "collapse", "hide-selection", "gizmo", "section-box",
                                              "section-clear", "measure-between",
-                                             "measure-centre-lines", "measure-clear"};
+                                             "measure-centre-lines", "measure-clear",
+                                             "path-play", "path-pause"};
   for (const char* a : with_text)
     if (action == a) return takes_text = true;
   for (const char* a : without_text)

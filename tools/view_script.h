@@ -27,6 +27,8 @@
 //   FRAME save-viewpoint NAME | go-viewpoint NAME
 // and the setting (view_environment.h):
 //   FRAME ocean on|off | sky on|off
+// and the path player (view_path.h):
+//   FRAME path-play | path-pause | path-seek SECONDS | path-smooth INTERVAL | path-save FILE
 // and measuring (view_measure.h):
 //   FRAME measure-at X Y (a snapped point; two give a distance, three an angle)
 //   FRAME measure-between | measure-centre-lines (the two selected objects) | measure-clear
