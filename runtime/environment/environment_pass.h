@@ -52,9 +52,9 @@ class EnvironmentPass {
   const EnvironmentOptions& options() const { return options_; }
   bool active() const { return options_.ocean || options_.sky; }
 
-  // Draws into the renderer's targets, after its opaque passes. `eye` is the camera's world
-  // position, `origin` the package's (what the renderer's eye-relative frame is relative to is
-  // eye - origin: only eye matters here), `time_s` drives the waves.
+  // Draws into the renderer's targets, after its opaque passes, with the camera of the frame:
+  // `eye` its world position (the renderer's frame is relative to it), the rotation and
+  // projection its beginFrame had; `time_s` drives the waves.
   EnvironmentStats draw(GlRenderer& renderer, const glm::dvec3& eye, const glm::mat4& view_rotation,
                         const glm::mat4& projection, double time_s);
 
