@@ -45,6 +45,8 @@ struct BenchOptions {
   std::string compare;
   std::string report_only;  // a saved results.json: only write its report (and --compare)
   bool keep_frames = false;
+  bool ocean = false, sky = false;  // the setting, in every render run (docs/presentation.md)
+  double waterline_m = -10.0;       // the generated plant's hull draws 10 m
 };
 
 // A runtime mode of the suite: its name in results.json, its `terawalk render` flags, and
@@ -251,6 +253,7 @@ struct BenchPlan {
   fs::path out_dir, work, cache, paths_dir;
   bool keep_frames = false;
   bool quiet = false;
+  std::vector<std::string> setting;  // --ocean, --sky and the waterline, for every render run
 
   void say(const std::string& text) const {
     if (!quiet) std::fprintf(stderr, "bench: %s\n", text.c_str());
@@ -265,6 +268,13 @@ BenchPlan planBench(const BenchOptions& o, const GlobalOptions& global) {
   plan.fps = o.fps > 0.0 ? o.fps : (o.quick ? 0.2 : 2.0);
   plan.walk_fps = o.walk_fps >= 0.0 ? o.walk_fps : (o.quick ? 0.0 : 10.0);
   plan.orbit_frames = o.orbit_frames > 0 ? o.orbit_frames : (o.quick ? 8 : 120);
+  if (o.ocean) plan.setting.push_back("--ocean");
+  if (o.sky) plan.setting.push_back("--sky");
+  if (o.ocean || o.sky) {
+    char waterline[32];
+    std::snprintf(waterline, sizeof waterline, "%.17g", o.waterline_m);
+    plan.setting.insert(plan.setting.end(), {"--waterline", waterline});
+  }
   int width = o.quick ? 320 : 1280, height = o.quick ? 180 : 720;
   if (!o.image_size.empty()) parseImageSize(o.image_size, "--size", width, height);
   plan.size_text = std::to_string(width) + "x" + std::to_string(height);
@@ -305,6 +315,7 @@ json resultsHeader(const BenchPlan& plan, const BenchOptions& o) {
         {"walk_modes", json::array()},
         {"image_size", size_text},
         {"orbit_frames", orbit_frames},
+        {"setting", plan.setting},
         {"modes", json::array()},
         {"paths", {"decks", "rack", "orbit"}}}},
       {"models", json::array()}};
@@ -365,6 +376,7 @@ std::map<std::string, std::vector<json>> renderModes(const BenchPlan& plan, cons
                                        path_file.string(), "--fps", std::to_string(fps),
                                        "--size", size_text, "--out", dir.string()};
       args.insert(args.end(), mode.flags.begin(), mode.flags.end());
+      args.insert(args.end(), plan.setting.begin(), plan.setting.end());
       // As an interactive walkthrough moves between recorded frames.
       const bool walked_path =
           std::find(kWalkPaths.begin(), kWalkPaths.end(), path_name) != kWalkPaths.end();
@@ -552,6 +564,10 @@ void registerBenchCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("--report-only", options->report_only,
                   "Write the report of a saved results.json without running anything");
   cmd->add_flag("--keep-frames", options->keep_frames, "Keep every rendered PNG under work/");
+  cmd->add_flag("--ocean", options->ocean, "Every render run draws the ocean (docs/presentation.md)");
+  cmd->add_flag("--sky", options->sky, "Every render run draws the sky");
+  cmd->add_option("--waterline", options->waterline_m, "The ocean's still water, world metres")
+      ->capture_default_str();
   cmd->callback([options, &global] { runBench(*options, global); });
 }
 
