@@ -12,7 +12,9 @@ StereoMode parseStereoMode(const std::string& name) {
   if (name == "side-by-side") return StereoMode::SideBySide;
   if (name == "top-bottom") return StereoMode::TopBottom;
   if (name == "anaglyph") return StereoMode::Anaglyph;
-  throw std::invalid_argument("stereo mode '" + name + "': give off, side-by-side, top-bottom or anaglyph");
+  if (name == "quad-buffered") return StereoMode::QuadBuffered;
+  throw std::invalid_argument("stereo mode '" + name +
+                              "': give off, side-by-side, top-bottom, anaglyph or quad-buffered");
 }
 
 const char* stereoModeName(StereoMode mode) {
@@ -21,6 +23,7 @@ const char* stereoModeName(StereoMode mode) {
     case StereoMode::SideBySide: return "side-by-side";
     case StereoMode::TopBottom: return "top-bottom";
     case StereoMode::Anaglyph: return "anaglyph";
+    case StereoMode::QuadBuffered: return "quad-buffered";
   }
   return "off";
 }
@@ -66,6 +69,8 @@ void composeStereo(StereoMode mode, int eye_width, int eye_height, std::span<con
     throw std::invalid_argument("composeStereo: an eye's image has the wrong size");
   const size_t row = size_t(eye_width) * 4;
   switch (mode) {
+    case StereoMode::QuadBuffered:
+      throw std::invalid_argument("composeStereo: quad-buffered stereo has no single frame");
     case StereoMode::Off:
       frame.assign(left.begin(), left.end());
       return;

@@ -19,7 +19,9 @@
 
 namespace tw {
 
-enum class StereoMode { Off, SideBySide, TopBottom, Anaglyph };
+// QuadBuffered: each eye to its own back buffer of a stereo GL context (the viewer's window, where
+// the display offers one); not a composed frame.
+enum class StereoMode { Off, SideBySide, TopBottom, Anaglyph, QuadBuffered };
 
 struct StereoOptions {
   StereoMode mode = StereoMode::Off;
@@ -27,7 +29,8 @@ struct StereoOptions {
   double zero_parallax_m = 10.0;  // distance at which the two images coincide
 };
 
-// "off", "side-by-side", "top-bottom", "anaglyph"; throws std::invalid_argument otherwise.
+// "off", "side-by-side", "top-bottom", "anaglyph", "quad-buffered"; throws std::invalid_argument
+// otherwise.
 StereoMode parseStereoMode(const std::string& name);
 const char* stereoModeName(StereoMode mode);
 // Throws std::invalid_argument for a separation outside 0..10 m or a zero-parallax distance not
@@ -35,7 +38,7 @@ const char* stereoModeName(StereoMode mode);
 void validateStereo(const StereoOptions& stereo);
 
 // The size of each eye's image inside a `width` x `height` frame: half the width side by side,
-// half the height one above the other, the whole frame for an anaglyph (and off).
+// half the height one above the other, the whole frame otherwise.
 void stereoEyeSize(StereoMode mode, int width, int height, int& eye_width, int& eye_height);
 
 // One eye: the centre camera moved sideways by half the separation (left: -1, right: +1), and
@@ -49,7 +52,8 @@ StereoEye stereoEye(const Camera& centre, double aspect, const StereoOptions& st
 // A camera behind the centre eye whose frustum holds both eyes' frusta (for the shared cut).
 Camera stereoCutCamera(const Camera& centre, double aspect, const StereoOptions& stereo);
 
-// The frame from the two eyes' images (RGBA, rows top-down, eye_width x eye_height each).
+// The frame from the two eyes' images (RGBA, rows top-down, eye_width x eye_height each); throws
+// std::invalid_argument for QuadBuffered, which has no single frame.
 void composeStereo(StereoMode mode, int eye_width, int eye_height, std::span<const uint8_t> left,
                    std::span<const uint8_t> right, std::vector<uint8_t>& frame);
 

@@ -657,5 +657,25 @@ TEST(Viewer, APathPausedAndSoughtMovesTheCameraAndIsWrittenSmoothed) {
   EXPECT_NE(test::readFile(log_file).find("path smoothed: 120 keys to"), std::string::npos);
 }
 
+// Quad-buffered stereo needs a stereo GL context; Xvfb (Mesa) offers none, and the viewer says
+// so in one line instead of opening a window that shows one eye. Where a display does offer one,
+// the viewer runs.
+TEST(Viewer, QuadBufferedStereoWithoutAStereoContextIsAClearError) {
+  if (!haveXvfb()) GTEST_SKIP() << "no Xvfb";
+  const auto dir = test::scratchDir();
+  test::XvfbScreen screen(dir / "x-quad", 640, 480);
+  const auto log_file = dir / "quad.log";
+  test::BackgroundProcess viewer({TW_TERAWALK_EXE, "view", test::generatedPlant().package.string(), "--size",
+                                  "640x480", "--frames", "5", "--stereo", "quad-buffered"},
+                                 {"DISPLAY=" + screen.display()}, log_file);
+  const int exit_code = viewer.wait();
+  const std::string log = test::readFile(log_file);
+  if (exit_code == 0) GTEST_SKIP() << "this display offers quad-buffered stereo";
+  EXPECT_EQ(exit_code, 1) << log;
+  EXPECT_NE(log.find("--stereo quad-buffered: this display offers no quad-buffered stereo GL context"),
+            std::string::npos)
+      << log;
+}
+
 }  // namespace
 }  // namespace tw

@@ -178,6 +178,9 @@ StereoOptions stereoOptions(const RenderArgs& args, int width, int height) {
   } catch (const std::invalid_argument& e) {
     throw std::runtime_error(std::string("--stereo: ") + e.what());
   }
+  if (stereo.mode == StereoMode::QuadBuffered)
+    throw std::runtime_error("--stereo quad-buffered: only the viewer's window shows it (render writes "
+                             "side-by-side, top-bottom or anaglyph frames)");
   if ((stereo.mode == StereoMode::SideBySide && width % 2 != 0) ||
       (stereo.mode == StereoMode::TopBottom && height % 2 != 0))
     throw std::runtime_error("--stereo " + args.stereo + ": the frame must split into two equal halves; give an even " +
@@ -709,7 +712,7 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
   addEnvironmentOptions(*cmd, args->environment);
   cmd->add_option("--stereo", args->stereo,
                   "Two eyes: off, side-by-side, top-bottom, anaglyph (red-cyan); --size is the "
-                  "whole frame")
+                  "whole frame (quad-buffered: in the viewer only)")
       ->capture_default_str();
   cmd->add_option("--eye-separation", args->eye_separation_m, "Stereo: between the eyes, metres")
       ->capture_default_str();

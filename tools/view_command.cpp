@@ -144,12 +144,19 @@ void onScroll(GLFWwindow* window, double, double dy) {
 // The window with a GL 4.5 core context and the ImGui overlay, torn down in reverse order.
 class ViewerWindow {
  public:
-  ViewerWindow(int width, int height) {
+  // `quad_buffered`: a stereo context (a left and a right back buffer), or an error saying the
+  // display has none.
+  ViewerWindow(int width, int height, bool quad_buffered) {
     glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
     glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
     glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
     glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+    glfwWindowHint(GLFW_STEREO, quad_buffered ? GLFW_TRUE : GLFW_FALSE);
     window_ = glfwCreateWindow(width, height, "TeraWalk", nullptr, nullptr);
+    if (!window_ && quad_buffered)
+      throw std::runtime_error(
+          "--stereo quad-buffered: this display offers no quad-buffered stereo GL context; use "
+          "side-by-side, top-bottom or anaglyph");
     if (!window_) throw std::runtime_error("GLFW: cannot create a GL 4.5 core window");
     glfwMakeContextCurrent(window_);
     glfwSwapInterval(0);
@@ -182,6 +189,7 @@ struct ViewSettings {
   int occlusion_mode = 0;
   int parametric_mode = 0;
   int stereo_mode = 0;  // StereoMode
+  bool quad_buffered = false;  // the window has a stereo context
   float eye_separation_m = 0.065f;
   float zero_parallax_m = 10.0f;
 };
@@ -270,8 +278,11 @@ void drawStatsPanel(const FrameStats& stats, ViewSettings& settings, const Navig
   static_assert(int(StereoMode::Off) == 0 && int(StereoMode::SideBySide) == 1 &&
                 int(StereoMode::TopBottom) == 2 && int(StereoMode::Anaglyph) == 3,
                 "the combo lists the modes in enum order");
-  const char* const stereo_names[] = {"off", "side by side", "top and bottom", "anaglyph (red-cyan)"};
-  ImGui::Combo("stereo", &settings.stereo_mode, stereo_names, 4);
+  // Quad-buffered only where the window was made with a stereo context (--stereo quad-buffered).
+  static_assert(int(StereoMode::QuadBuffered) == 4, "the combo lists the modes in enum order");
+  const char* const stereo_names[] = {"off", "side by side", "top and bottom", "anaglyph (red-cyan)",
+                                      "quad-buffered"};
+  ImGui::Combo("stereo", &settings.stereo_mode, stereo_names, settings.quad_buffered ? 5 : 4);
   ImGui::SliderFloat("eye separation (m)", &settings.eye_separation_m, 0.0f, 5.0f, "%.3f",
                      ImGuiSliderFlags_Logarithmic);
   ImGui::SliderFloat("zero parallax (m)", &settings.zero_parallax_m, 0.5f, 1000.0f, "%.1f",
@@ -530,6 +541,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   settings.occlusion_mode = static_cast<int>(options.occlusion);
   settings.parametric_mode = static_cast<int>(walk.parametrics());  // auto is resolved by now
   settings.stereo_mode = static_cast<int>(args.stereo.mode);
+  settings.quad_buffered = args.stereo.mode == StereoMode::QuadBuffered;
   settings.eye_separation_m = float(args.stereo.eye_separation_m);
   settings.zero_parallax_m = float(args.stereo.zero_parallax_m);
   ViewStereo stereo_screen;
@@ -737,7 +749,7 @@ void runView(ViewArgs args) {
     throw std::runtime_error(std::string("--stereo: ") + e.what());
   }
   GlfwSession glfw;
-  ViewerWindow window(width, height);
+  ViewerWindow window(width, height, args.stereo.mode == StereoMode::QuadBuffered);
   const WalkthroughOptions options = viewOptions(args, window.get());
   Walkthrough walk(args.file, options);
   const std::optional<ProjectDatabase> db = openPackageDatabase(args.file, walk.package(), args.db);
@@ -779,8 +791,9 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
       ->capture_default_str();
   addEnvironmentOptions(*cmd, args->environment);
   cmd->add_option("--stereo", args->stereo_mode,
-                  "Stereo at start: off, side-by-side, top-bottom, anaglyph (the Settings panel "
-                  "changes it, the eye separation and the zero-parallax distance)")
+                  "Stereo at start: off, side-by-side, top-bottom, anaglyph, quad-buffered (where "
+                  "the display offers it); the Settings panel changes it, the eye separation and "
+                  "the zero-parallax distance")
       ->capture_default_str();
   cmd->add_option("--eye-separation", args->stereo.eye_separation_m, "Stereo: between the eyes, metres")
       ->capture_default_str();

@@ -1,7 +1,8 @@
 // The viewer's stereo: both eyes drawn (Walkthrough::renderStereoFrame), put together on the CPU
 // (composeStereo) and shown through a texture the size of the composed frame, so side by side,
-// top and bottom and anaglyph all reach the window the same way. Quad-buffered stereo is not
-// offered: GLFW can ask for it, but no context this program runs under (Mesa, Xvfb) gives one.
+// top and bottom and anaglyph all reach the window the same way. Quad-buffered stereo (asked for
+// at start, `--stereo quad-buffered`, where the display offers a stereo context) sends each eye to
+// its own back buffer instead.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +27,9 @@ class ViewStereo {
   void present(int screen_width, int screen_height);
 
  private:
+  void upload(const std::vector<uint8_t>& rgba, int width, int height);
+  void blitTo(unsigned draw_buffer, int screen_width, int screen_height);
+  StereoMode mode_ = StereoMode::Off;
   std::vector<uint8_t> left_, right_, frame_;
   int width_ = 0, height_ = 0;  // of frame_
   unsigned texture_ = 0, framebuffer_ = 0;
