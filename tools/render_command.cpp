@@ -35,6 +35,7 @@
 #include "snapshot_camera.h"
 #include "soak_log.h"
 #include "tessellate.h"
+#include "stereo_options.h"
 #include "video_encoder.h"
 
 namespace tw {
@@ -84,9 +85,7 @@ struct RenderArgs {
   std::string viewpoint;  // FILE.bcfzip[#N]
   std::string changes;    // a change set (model.changes.json)
   std::string video;      // FILE.mp4|.mkv|.avi: the recorded frames as a video
-  std::string stereo = "off";  // stereo.h: off, side-by-side, top-bottom, anaglyph
-  double eye_separation_m = StereoOptions{}.eye_separation_m;
-  double zero_parallax_m = StereoOptions{}.zero_parallax_m;
+  StereoArgs stereo;      // --stereo and its distances
 };
 
 // The recorded frame's picture: the renderer's colour, or a stereo pair put together.
@@ -167,23 +166,15 @@ void validateArgs(const RenderArgs& args) {
   validateReviewStateArgs(args.state);
 }
 
-// --stereo and its distances, checked against the frame size (halves must be whole).
-StereoOptions stereoOptions(const RenderArgs& args, int width, int height) {
-  StereoOptions stereo;
-  try {
-    stereo.mode = parseStereoMode(args.stereo);
-    stereo.eye_separation_m = args.eye_separation_m;
-    stereo.zero_parallax_m = args.zero_parallax_m;
-    validateStereo(stereo);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("--stereo: ") + e.what());
-  }
+// --stereo and its distances, checked against what render can write (halves must be whole).
+StereoOptions renderStereoOptions(const RenderArgs& args, int width, int height) {
+  const StereoOptions stereo = stereoOptions(args.stereo);
   if (stereo.mode == StereoMode::QuadBuffered)
     throw std::runtime_error("--stereo quad-buffered: only the viewer's window shows it (render writes "
                              "side-by-side, top-bottom or anaglyph frames)");
   if ((stereo.mode == StereoMode::SideBySide && width % 2 != 0) ||
       (stereo.mode == StereoMode::TopBottom && height % 2 != 0))
-    throw std::runtime_error("--stereo " + args.stereo + ": the frame must split into two equal halves; give an even " +
+    throw std::runtime_error("--stereo " + args.stereo.mode + ": the frame must split into two equal halves; give an even " +
                              (stereo.mode == StereoMode::SideBySide ? "width" : "height"));
   if (stereo.mode != StereoMode::Off && args.check_occlusion)
     throw std::runtime_error("--check-occlusion does not check stereo frames");
@@ -515,7 +506,7 @@ nlohmann::json renderSummary(const RenderArgs& args, const WalkthroughOptions& o
       {"peak_rss_bytes", peak_rss},
       {"gpu_budget_bytes", options.pager.gpu_budget_bytes},
       {"host_budget_bytes", options.pager.host_budget_bytes},
-      {"stereo", args.stereo},
+      {"stereo", args.stereo.mode},
       {"eye_width", options.width},
       {"eye_height", options.height},
       {"video", args.video},
@@ -547,7 +538,7 @@ void runRender(const RenderArgs& args, const GlobalOptions& global) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
   validateArgs(args);
-  const StereoOptions stereo = stereoOptions(args, width, height);
+  const StereoOptions stereo = renderStereoOptions(args, width, height);
   if (!args.out_dir.empty()) std::filesystem::create_directories(args.out_dir);
 
   RenderTimes times;
@@ -710,15 +701,9 @@ void registerRenderCommand(CLI::App& app, const GlobalOptions& global) {
                 "hzb: next frame's visible set from a second pyramid of the final depth (default)");
   addReviewStateOptions(*cmd, args->state);
   addEnvironmentOptions(*cmd, args->environment);
-  cmd->add_option("--stereo", args->stereo,
-                  "Two eyes: off, side-by-side, top-bottom, anaglyph (red-cyan); --size is the "
-                  "whole frame (quad-buffered: in the viewer only)")
-      ->capture_default_str();
-  cmd->add_option("--eye-separation", args->eye_separation_m, "Stereo: between the eyes, metres")
-      ->capture_default_str();
-  cmd->add_option("--zero-parallax", args->zero_parallax_m,
-                  "Stereo: distance at which both eyes' images coincide, metres")
-      ->capture_default_str();
+  addStereoOptions(*cmd, args->stereo,
+                   "Two eyes: off, side-by-side, top-bottom, anaglyph (red-cyan); --size is the "
+                   "whole frame (quad-buffered: in the viewer only)");
   cmd->add_option("--video", args->video,
                   "Write the recorded frames as a video at --fps (FILE.mp4 or .mkv: H.264; .avi: "
                   "MJPEG), each frame rendered settled; needs ffmpeg");

@@ -44,6 +44,7 @@
 #include "view_edits.h"
 #include "view_environment.h"
 #include "view_path.h"
+#include "stereo_options.h"
 #include "view_stereo.h"
 #include "view_measure.h"
 #include "view_sections.h"
@@ -71,8 +72,8 @@ struct ViewArgs {
   std::string db;      // the project database, for the properties panel
   std::string script;  // clicks and keys at given frames (view_script.h)
   EnvironmentArgs environment;  // --ocean, --sky and their settings
-  std::string stereo_mode = "off";
-  StereoOptions stereo;  // from stereo_mode and the two distances, checked by runView
+  StereoArgs stereo_args;  // --stereo and its distances
+  StereoOptions stereo;    // what they say, checked by runView
 };
 
 struct GlfwSession {
@@ -742,12 +743,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
 void runView(ViewArgs args) {
   int width = 0, height = 0;
   parseImageSize(args.size, "--size", width, height);
-  try {
-    args.stereo.mode = parseStereoMode(args.stereo_mode);
-    validateStereo(args.stereo);
-  } catch (const std::invalid_argument& e) {
-    throw std::runtime_error(std::string("--stereo: ") + e.what());
-  }
+  args.stereo = stereoOptions(args.stereo_args);
   GlfwSession glfw;
   ViewerWindow window(width, height, args.stereo.mode == StereoMode::QuadBuffered);
   const WalkthroughOptions options = viewOptions(args, window.get());
@@ -790,16 +786,10 @@ void registerViewCommand(CLI::App& app, const GlobalOptions&) {
       ->check(CLI::IsMember({"impostor", "tessellated", "off", "auto"}))
       ->capture_default_str();
   addEnvironmentOptions(*cmd, args->environment);
-  cmd->add_option("--stereo", args->stereo_mode,
-                  "Stereo at start: off, side-by-side, top-bottom, anaglyph, quad-buffered (where "
-                  "the display offers it); the Settings panel changes it, the eye separation and "
-                  "the zero-parallax distance")
-      ->capture_default_str();
-  cmd->add_option("--eye-separation", args->stereo.eye_separation_m, "Stereo: between the eyes, metres")
-      ->capture_default_str();
-  cmd->add_option("--zero-parallax", args->stereo.zero_parallax_m,
-                  "Stereo: distance at which both eyes' images coincide, metres")
-      ->capture_default_str();
+  addStereoOptions(*cmd, args->stereo_args,
+                   "Stereo at start: off, side-by-side, top-bottom, anaglyph, quad-buffered (where "
+                   "the display offers it); the Settings panel changes it, the eye separation and "
+                   "the zero-parallax distance");
   cmd->callback([args] { runView(*args); });
 }
 

@@ -239,6 +239,9 @@ EnvironmentPass::~EnvironmentPass() {
 void EnvironmentPass::set(const EnvironmentOptions& options) {
   options_ = options;
   terms_ = waveTerms(options.waves);
+  // How far the waves can move the water from its still place, up, down or sideways.
+  wave_reach_m_ = 0.0;
+  for (const WaveTerm& w : terms_) wave_reach_m_ += w.amplitude * (1.0 + w.q);
 }
 
 EnvironmentStats EnvironmentPass::draw(GlRenderer& renderer, const glm::dvec3& eye,
@@ -280,7 +283,7 @@ void EnvironmentPass::drawOcean(GlRenderer& renderer, const glm::dvec3& eye,
   const auto start = std::chrono::steady_clock::now();
   OceanFrustum frustum;
   frustum.view_projection = glm::dmat4(view_projection);
-  for (const WaveTerm& w : terms_) frustum.wave_reach_m += w.amplitude * (1.0 + w.q);
+  frustum.wave_reach_m = wave_reach_m_;
   buildOceanMesh(options_.grid, eye, mesh_, &frustum);
   // Eye-relative, in double then float: plant coordinates are millions of metres.
   relative_.resize(mesh_.positions.size());

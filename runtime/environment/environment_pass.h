@@ -66,6 +66,7 @@ class EnvironmentPass {
 
   EnvironmentOptions options_;
   std::vector<WaveTerm> terms_;
+  double wave_reach_m_ = 0.0;  // the leaves' boxes grow by it for frustum culling
   OceanMesh mesh_;                   // this frame's, its memory kept from frame to frame
   std::vector<glm::vec2> relative_;  // its positions relative to the eye, as uploaded
   unsigned ocean_program_ = 0, sky_program_ = 0;
