@@ -419,11 +419,13 @@ TEST(Viewer, ExplodingAndCollapsingGivesTheOriginalFrame) {
   const auto package = dir / "plant.twk";
   std::filesystem::copy_file(test::generatedPlant().package, package);
   const ScriptedRun exploded = runViewerScript(
-      package, dir, "explode", "20 search pump\n22 select-results\n24 zoom-results\n150 explode 3\n250 quit\n",
+      package, dir, "explode",
+      "20 search pump\n22 select-results\n24 zoom-results\n30 settle\n150 explode 3\n250 quit\n",
       "explode to 3.00", "explode to 3.00");
   const ScriptedRun collapsed = runViewerScript(
       package, dir, "collapse",
-      "20 search pump\n22 select-results\n24 zoom-results\n150 explode 3\n200 collapse\n350 quit\n",
+      "20 search pump\n22 select-results\n24 zoom-results\n30 settle\n150 explode 3\n200 collapse\n"
+      "230 settle\n350 quit\n",
       "explode to 3.00", "explode to 1.00");
   ASSERT_EQ(exploded.exit_code, 0) << exploded.log;
   ASSERT_EQ(collapsed.exit_code, 0) << collapsed.log;

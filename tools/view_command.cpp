@@ -46,6 +46,7 @@
 #include "view_path.h"
 #include "stereo_options.h"
 #include "view_stereo.h"
+#include "view_log.h"
 #include "view_measure.h"
 #include "view_sections.h"
 #include "view_viewpoints.h"
@@ -563,6 +564,8 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
   const std::vector<ViewEvent> script =
       args.script.empty() ? std::vector<ViewEvent>{} : readViewScript(args.script);
   size_t next_event = 0;
+  int script_delay = 0;   // frames the script waited at its `settle` events
+  int steady_frames = 0;  // frames running with every page the cut wants drawn
   bool quit = false;
   bool mouse_was_down = false;
 
@@ -620,6 +623,7 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     stats = stereo.mode == StereoMode::Off ? walk.renderFrame(camera, t)
                                            : stereo_screen.render(walk, camera, t, stereo);
     settings.tau = float(walk.tau());
+    steady_frames = stats.ancestor_fallbacks == 0 && stats.pages_requested == 0 ? steady_frames + 1 : 0;
 
     // Clicks pick in the frame just drawn, from the mouse and from the script.
     int win_w = 0, win_h = 0;
@@ -661,13 +665,20 @@ void runViewLoop(const ViewArgs& args, GLFWwindow* window, Walkthrough& walk,
     };
     if (const auto click = clicks.update(window, t, edits.capturing()))
       pickAt(click->x, click->y, click->ctrl, click->twice);
-    for (; next_event < script.size() && script[next_event].frame <= frame; ++next_event) {
+    for (; next_event < script.size() && script[next_event].frame + script_delay <= frame; ++next_event) {
       const ViewEvent& e = script[next_event];
+      if (e.kind == ViewEvent::Kind::Settle) {
+        if (steady_frames < 3) break;  // held: this event again next frame
+        script_delay = frame - e.frame;
+        viewSay("view: settled at frame %d\n", frame);
+        continue;
+      }
       switch (e.kind) {
         case ViewEvent::Kind::Click: pickAt(e.x, e.y, false, false); break;
         case ViewEvent::Kind::CtrlClick: pickAt(e.x, e.y, true, false); break;
         case ViewEvent::Kind::DoubleClick: pickAt(e.x, e.y, false, true); break;
         case ViewEvent::Kind::Quit: quit = true; break;
+        case ViewEvent::Kind::Settle: break;  // above
         case ViewEvent::Kind::Review:
           if (e.action == "measure-at") {
             double x = 0.0, y = 0.0;

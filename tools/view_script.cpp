@@ -78,6 +78,8 @@ std::vector<ViewEvent> readViewScript(const std::filesystem::path& path) {
       e.kind = ViewEvent::Kind::Key;
     } else if (kind == "quit") {
       e.kind = ViewEvent::Kind::Quit;
+    } else if (kind == "settle") {
+      e.kind = ViewEvent::Kind::Settle;
     } else if (bool takes_text = false; reviewActionTakesText(kind, takes_text)) {
       e.kind = ViewEvent::Kind::Review;
       e.action = kind;
@@ -89,7 +91,7 @@ std::vector<ViewEvent> readViewScript(const std::filesystem::path& path) {
       }
     } else {
       fail("unknown event '" + kind +
-           "' (click, ctrl-click, double-click, key, quit, or a review action: hide-layer, "
+           "' (click, ctrl-click, double-click, key, quit, settle, or a review action: hide-layer, "
            "show-layer, isolate-layer, xray-others, show-all, search, query, select-results, "
            "isolate-results, zoom-results, save-selection, save-visibility, restore)");
     }

@@ -7,6 +7,10 @@
 //   FRAME double-click X Y   select it and frame the selection
 //   FRAME key NAME           escape, o, p, r, f12
 //   FRAME quit
+//   FRAME settle             hold the script until the view has settled (no page waiting, no
+//                            coarser ancestor drawn for a missing page, three frames running);
+//                            the later frame numbers count from the frame it settled at, so a
+//                            slow machine sees the same pictures as a fast one
 //
 // and the review panel's actions (view_review.h), as its buttons do them; TEXT is the rest of
 // the line:
@@ -43,7 +47,7 @@
 namespace tw {
 
 struct ViewEvent {
-  enum class Kind { Click, CtrlClick, DoubleClick, Key, Quit, Review };
+  enum class Kind { Click, CtrlClick, DoubleClick, Key, Quit, Settle, Review };
   int frame = 0;
   Kind kind = Kind::Click;
   int x = 0, y = 0;  // clicks
