@@ -75,6 +75,8 @@ BrickedScene deserializeBrickedScene(std::span<const uint8_t> bytes,
 
 // The key reserved for the "bricking pass complete" marker: the BrickedScene description.
 constexpr uint32_t kBrickedSceneKey = 0xffffffffu;
+// The key of the seams between the bricks (BrickSeams::serialize), stored after the bricking.
+constexpr uint32_t kBrickSeamsKey = 0xfffffffeu;
 
 // Stores the description after brickScene has finished (its spill files complete).
 void storeBrickedScene(BrickCache& cache, const BrickedScene& scene);

@@ -191,4 +191,30 @@ bool BrickSeams::contains(const glm::vec3& a, const glm::vec3& b) const {
   return std::binary_search(hashes_.begin(), hashes_.end(), seamEdgeHash(seamEdgeKey(a, b)));
 }
 
+namespace {
+constexpr uint32_t kSeamsBlobVersion = 1;
+}
+
+std::vector<uint8_t> BrickSeams::serialize() const {
+  ByteWriter out;
+  out.put(kSeamsBlobVersion);
+  out.putArray(hashes_);
+  weld_.write(out);
+  return std::move(out.bytes);
+}
+
+BrickSeams BrickSeams::deserialize(std::span<const uint8_t> bytes, const std::string& source) {
+  ByteReader in(bytes, source);
+  if (const uint32_t version = in.get<uint32_t>(); version != kSeamsBlobVersion)
+    in.fail("seams blob version " + std::to_string(version) + ", expected " +
+            std::to_string(kSeamsBlobVersion));
+  BrickSeams seams;
+  seams.hashes_ = in.getArray<uint64_t>();
+  if (!std::is_sorted(seams.hashes_.begin(), seams.hashes_.end()))
+    in.fail("the seam edges are not sorted");
+  seams.weld_ = CrossBrickWeld::read(in);
+  if (!in.atEnd()) in.fail("bytes after the seams");
+  return seams;
+}
+
 }  // namespace tw

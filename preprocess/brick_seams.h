@@ -22,6 +22,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -65,6 +66,11 @@ class BrickSeams {
   // made one.
   void weldAcrossBricks(std::span<glm::vec3> positions) const { weld_.apply(positions); }
   size_t weldedPositions() const { return weld_.movedPositions(); }
+
+  // Into a blob and back: the plan step finds the seams once and every brick job reads them.
+  // Reading throws FormatError naming `source` for a short or damaged blob.
+  std::vector<uint8_t> serialize() const;
+  static BrickSeams deserialize(std::span<const uint8_t> bytes, const std::string& source);
 
  private:
   static BrickSeams fromSortedHashes(const std::vector<std::vector<uint64_t>>& per_brick);

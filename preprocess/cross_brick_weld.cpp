@@ -2,6 +2,7 @@
 #include "cross_brick_weld.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <tuple>
@@ -97,6 +98,32 @@ void CrossBrickWeld::apply(std::span<glm::vec3> positions) const {
     auto it = moved_.find(positionKeyOf(p));
     if (it != moved_.end()) p = it->second;
   }
+}
+
+namespace {
+struct StoredMove {
+  glm::vec3 from, to;
+};
+}  // namespace
+
+void CrossBrickWeld::write(ByteWriter& out) const {
+  std::vector<StoredMove> moves;
+  moves.reserve(moved_.size());
+  for (const auto& [key, to] : moved_)
+    moves.push_back(StoredMove{glm::vec3(std::bit_cast<float>(key.x), std::bit_cast<float>(key.y),
+                               std::bit_cast<float>(key.z)),
+                     to});
+  std::sort(moves.begin(), moves.end(),
+            [](const StoredMove& a, const StoredMove& b) { return positionLess(a.from, b.from); });
+  out.putArray(moves);
+  out.putArray(bricks_);
+}
+
+CrossBrickWeld CrossBrickWeld::read(ByteReader& in) {
+  CrossBrickWeld weld;
+  for (const StoredMove& move : in.getArray<StoredMove>()) weld.moved_[positionKeyOf(move.from)] = move.to;
+  weld.bricks_ = in.getArray<uint32_t>();
+  return weld;
 }
 
 }  // namespace tw

@@ -28,6 +28,7 @@
 
 #include <glm/glm.hpp>
 
+#include "byte_packing.h"
 #include "position_key.h"
 
 namespace tw {
@@ -49,6 +50,11 @@ class CrossBrickWeld {
   // The bricks holding a moved position, ascending.
   const std::vector<uint32_t>& bricksWithMoves() const { return bricks_; }
   size_t movedPositions() const { return moved_.size(); }
+
+  // Into a blob and back (the plan of a scale-out run keeps it for the brick jobs); the moves in
+  // position order, so equal welds give equal bytes.
+  void write(ByteWriter& out) const;
+  static CrossBrickWeld read(ByteReader& in);
 
  private:
   std::unordered_map<PositionKey, glm::vec3, PositionHash> moved_;

@@ -1,5 +1,6 @@
 // The preprocessing run: stage order, the resume store, timing and the report.
 #include "preprocess_driver.h"
+#include "preprocess_steps.h"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -8,10 +9,12 @@
 #include <cstring>
 
 #include <algorithm>
+#include <fstream>
 #include <cmath>
 #include <chrono>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 
 #include <tbb/global_control.h>
@@ -47,6 +50,25 @@ uint64_t peakRssBytes() {
   rusage usage{};
   getrusage(RUSAGE_SELF, &usage);
   return static_cast<uint64_t>(usage.ru_maxrss) * 1024;  // Linux reports KiB
+}
+
+// The resident high-water mark since the last resetPeakRss (Linux: VmHWM); 0 when unknown.
+uint64_t peakRssSinceReset() {
+  std::ifstream status("/proc/self/status");
+  std::string word;
+  while (status >> word)
+    if (word == "VmHWM:") {
+      uint64_t kib = 0;
+      status >> kib;
+      return kib * 1024;
+    }
+  return 0;
+}
+
+// Lets one process report each brick job's own peak (a rank builds several).
+void resetPeakRss() {
+  std::ofstream clear("/proc/self/clear_refs");
+  clear << "5";
 }
 
 class StageClock {
@@ -203,11 +225,18 @@ class PreprocessRun {
         snapper_(storage_.position_step_m),
         cache_(openCache()) {}
 
+  // The steps of a split run (preprocess_steps.h) read what the plan left and never redo it.
+  void requirePlan(uint64_t plan_run_hash);
   void brickInputs();
   void findSeams();
   float inputNoiseTolerance() const;
   uint32_t brickStopLevel() const;
   void buildBricks();
+  void requireBuiltBricks() const;
+  BrickJobReport buildBrickJob(uint32_t b);
+  const BrickedScene& scene() const { return scene_; }
+  const PreprocessReport& report() const { return report_; }
+  uint64_t runHash() const { return cache_.runHash(); }
   void mergeUpperLevels();
   void pack();
   void write();
@@ -222,6 +251,8 @@ class PreprocessRun {
   void packMeshClusters();
   void packParametricClusters();
   DagOptions optionsForBrick(uint32_t b) const;
+  void prepareBrickOptions();
+  ClusterDag buildBrickDag(uint32_t b);
   SnapPiece upperSnapPiece() const { return {upper_.clusters, {}, SharedPositions::All, {}}; }
 
   const PreprocessOptions& options_;
@@ -236,6 +267,7 @@ class PreprocessRun {
   PackageStorage storage_;
   QuantizationSnapper snapper_;
   BrickCache cache_;
+  bool plan_must_exist_ = false;
   BrickedScene scene_;
   BrickSeams seams_;
   std::vector<BrickRecord> bricks_;
@@ -285,7 +317,7 @@ BrickCache PreprocessRun::openCache() {
   if (options_.threads > 0)
     thread_limit_ = std::make_unique<tbb::global_control>(
         tbb::global_control::max_allowed_parallelism, options_.threads);
-  bricking_.work_dir = workDirFor(options_.output);
+  bricking_.work_dir = options_.work_dir.empty() ? workDirFor(options_.output) : options_.work_dir;
   bricking_.memory_budget_bytes = options_.memory_budget_bytes;
   bricking_.max_brick_triangles = options_.max_brick_triangles;
   bricking_.position_step_m = pkg::kDefaultPositionStepM;
@@ -314,6 +346,10 @@ void PreprocessRun::brickInputs() {
       report_.bricking_reused = true;
     }
   }
+  if (!report_.bricking_reused && plan_must_exist_)
+    throw std::runtime_error(bricking_.work_dir.string() +
+                             ": the plan's bricking is missing or damaged; run `terawalk preprocess "
+                             "plan` again");
   if (!report_.bricking_reused) {
     clock_.start("survey");
     SceneSurvey survey = surveyScene(options_.inputs, bricking_.nurbs_tolerance, progress_,
@@ -369,7 +405,19 @@ void PreprocessRun::findSeams() {
   brick_options_ = dag_options_;
   if (scene_.bricks.size() <= 1) return;
   clock_.start("seams");
-  seams_ = BrickSeams::find(scene_, inputNoiseTolerance(), progress_);
+  // Found once per bricking: a resumed run and every brick job read them back.
+  std::optional<std::vector<uint8_t>> stored;
+  if (report_.bricking_reused) stored = cache_.load(kBrickSeamsKey);
+  if (stored) {
+    seams_ = BrickSeams::deserialize(*stored, cache_.blobPath(kBrickSeamsKey).string());
+  } else if (plan_must_exist_) {
+    throw std::runtime_error(cache_.blobPath(kBrickSeamsKey).string() +
+                             ": the plan's seams are missing or damaged; run `terawalk preprocess "
+                             "plan` again");
+  } else {
+    seams_ = BrickSeams::find(scene_, inputNoiseTolerance(), progress_);
+    cache_.store(kBrickSeamsKey, seams_.serialize());
+  }
   report_.seam_edges = seams_.size();
   report_.welded_across_bricks = seams_.weldedPositions();
   brick_options_.lock_open_boundaries = true;
@@ -434,8 +482,7 @@ DagOptions PreprocessRun::optionsForBrick(uint32_t b) const {
 void PreprocessRun::buildBricks() {
   clock_.start("build bricks");
   beginStage(progress_, "build bricks", scene_.bricks.size());
-  brick_options_.position_step_m = storage_.position_step_m;
-  brick_options_.noise_tolerance_m = inputNoiseTolerance();
+  prepareBrickOptions();
   const uint64_t resident_limit = options_.memory_budget_bytes / 8;
   bricks_.resize(scene_.bricks.size());
   resident_.resize(scene_.bricks.size());
@@ -447,12 +494,11 @@ void PreprocessRun::buildBricks() {
     if (blob) {
       dag = deserializeClusterDag(*blob, cache_.blobPath(b).string());
       ++report_.bricks_reused;
+    } else if (plan_must_exist_) {
+      throw std::runtime_error("preprocess: brick " + std::to_string(b) + " is not built (" +
+                               cache_.blobPath(b).string() + ")");
     } else {
-      BrickMesh mesh = loadBrick(scene_, b);
-      seams_.weldAcrossBricks(mesh.positions);
-      dag = buildClusterDag(DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids},
-                            optionsForBrick(b));
-      mesh = BrickMesh{};
+      dag = buildBrickDag(b);
       blob = serializeClusterDag(dag);
       cache_.store(b, *blob);
     }
@@ -486,6 +532,69 @@ void PreprocessRun::buildBricks() {
   }
   endStage(progress_);
   throwIfCancelled(progress_);
+}
+
+void PreprocessRun::prepareBrickOptions() {
+  brick_options_.position_step_m = storage_.position_step_m;
+  brick_options_.noise_tolerance_m = inputNoiseTolerance();
+}
+
+// One brick's DAG from its triangles, welded to its neighbours' rims.
+ClusterDag PreprocessRun::buildBrickDag(uint32_t b) {
+  BrickMesh mesh = loadBrick(scene_, b);
+  seams_.weldAcrossBricks(mesh.positions);
+  return buildClusterDag(DagInput{mesh.positions, mesh.indices, mesh.triangle_object_ids},
+                         optionsForBrick(b));
+}
+
+// A step's work directory must hold the plan's bricking for the same inputs and options.
+void PreprocessRun::requirePlan(uint64_t plan_run_hash) {
+  plan_must_exist_ = true;
+  if (cache_.runHash() != plan_run_hash)
+    throw std::runtime_error(
+        bricking_.work_dir.string() +
+        ": the inputs (their sizes or modification times) or this terawalk changed since the "
+        "plan was made; run `terawalk preprocess plan` again");
+}
+
+// The merge's precondition, with every missing brick named at once.
+void PreprocessRun::requireBuiltBricks() const {
+  std::string missing;
+  uint32_t count = 0;
+  for (uint32_t b = 0; b < scene_.bricks.size(); ++b)
+    if (!std::filesystem::exists(cache_.blobPath(b))) {
+      if (count++ < 20) missing += (missing.empty() ? "" : " ") + std::to_string(b);
+    }
+  if (count == 0) return;
+  throw std::runtime_error(
+      bricking_.work_dir.string() + ": " + std::to_string(count) + " of " +
+      std::to_string(scene_.bricks.size()) + " bricks are not built (" + missing +
+      (count > 20 ? " ..." : "") + "); run `terawalk preprocess brick --work " +
+      bricking_.work_dir.string() + " --index N` for each");
+}
+
+// A brick job: the brick's DAG into the resume store, unless it is there already.
+BrickJobReport PreprocessRun::buildBrickJob(uint32_t b) {
+  if (b >= scene_.bricks.size())
+    throw std::invalid_argument("preprocess brick: index " + std::to_string(b) +
+                                " is not in the plan (" + std::to_string(scene_.bricks.size()) +
+                                " bricks, 0.." + std::to_string(scene_.bricks.size() - 1) + ")");
+  BrickJobReport job;
+  job.index = b;
+  job.triangles = scene_.bricks[b].triangle_count;
+  if (cache_.has(b)) {
+    job.already_built = true;
+    return job;
+  }
+  resetPeakRss();
+  const auto start = Clock::now();
+  prepareBrickOptions();
+  const ClusterDag dag = buildBrickDag(b);
+  cache_.store(b, serializeClusterDag(dag));
+  job.clusters = dag.clusters.size();
+  job.seconds = secondsSince(start);
+  job.peak_rss_bytes = peakRssSinceReset();
+  return job;
 }
 
 // 3. Upper levels from all the bricks' roots, renumbered after the bricks' clusters and groups;
@@ -722,9 +831,94 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
     // would keep a full disk full. A cancelled run keeps its finished bricks for --resume, and
     // so does any run with --keep-work. (A killed run cannot clean up: --resume reuses it.)
     const bool cancelled = options.progress && options.progress->cancelled();
-    if (!cancelled && !options.keep_work_dir) removeWorkDir(workDirFor(options.output));
+    if (!cancelled && !options.keep_work_dir)
+      removeWorkDir(options.work_dir.empty() ? workDirFor(options.output) : options.work_dir);
     throw;
   }
+}
+
+namespace {
+
+// The options a step runs with: the plan's, with the step's own threads, progress and output,
+// over the plan's work directory, never clearing it.
+PreprocessOptions stepOptions(const PreprocessPlan& plan, const StepOptions& step) {
+  PreprocessOptions options = plan.options;
+  options.threads = step.threads;
+  options.progress = step.progress;
+  options.output = step.output;
+  options.keep_work_dir = step.keep_work_dir;
+  options.resume = true;
+  return options;
+}
+
+}  // namespace
+
+PreprocessPlan planPreprocess(const PreprocessOptions& given) {
+  PreprocessOptions options = given;
+  if (options.inputs.empty()) throw std::invalid_argument("no input files");
+  if (options.work_dir.empty()) {
+    if (options.output.empty())
+      throw std::invalid_argument("preprocess plan: --work names the work directory");
+    options.work_dir = workDirFor(options.output);
+  }
+  // Every step may run elsewhere in the shared folder: the plan names its inputs absolutely.
+  for (auto& input : options.inputs) input = std::filesystem::absolute(input);
+  if (!options.database.empty())
+    options.database = std::filesystem::absolute(options.database).lexically_normal();
+  options.resume = true;  // a finished bricking of the same inputs and options is kept
+  PreprocessRun run(options);
+  run.brickInputs();
+  run.findSeams();
+
+  PreprocessPlan plan;
+  plan.options = options;
+  plan.options.output.clear();
+  plan.run_hash = run.runHash();
+  plan.input_triangles = run.report().input_triangles;
+  plan.primitives = run.report().primitives;
+  plan.objects = run.report().objects;
+  for (const BrickInfo& brick : run.scene().bricks)
+    plan.jobs.push_back({brick.index, brick.triangle_count});
+  std::stable_sort(plan.jobs.begin(), plan.jobs.end(),
+                   [](const BrickJob& a, const BrickJob& b) { return a.triangles > b.triangles; });
+  writePreprocessPlan(plan, options.work_dir);
+  return plan;
+}
+
+struct PlannedBricks::State {
+  PreprocessOptions options;
+  std::unique_ptr<PreprocessRun> run;
+};
+
+PlannedBricks::PlannedBricks(const PreprocessPlan& plan, const StepOptions& step)
+    : state_(std::make_unique<State>()) {
+  state_->options = stepOptions(plan, step);
+  state_->run = std::make_unique<PreprocessRun>(state_->options);
+  state_->run->requirePlan(plan.run_hash);
+  state_->run->brickInputs();
+  state_->run->findSeams();
+}
+
+PlannedBricks::~PlannedBricks() = default;
+
+uint32_t PlannedBricks::count() const { return uint32_t(state_->run->scene().bricks.size()); }
+
+BrickJobReport PlannedBricks::build(uint32_t index) { return state_->run->buildBrickJob(index); }
+
+PreprocessReport mergePreprocess(const PreprocessPlan& plan, const StepOptions& step) {
+  const PreprocessOptions options = stepOptions(plan, step);
+  validateOptions(options);
+  PreprocessRun run(options);
+  run.requirePlan(plan.run_hash);
+  run.brickInputs();
+  run.requireBuiltBricks();
+  run.findSeams();
+  run.buildBricks();
+  run.mergeUpperLevels();
+  run.pack();
+  run.write();
+  run.buildVisibility();
+  return run.finish();
 }
 
 }  // namespace tw

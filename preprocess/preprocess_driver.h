@@ -29,6 +29,8 @@ namespace tw {
 struct PreprocessOptions {
   std::vector<std::filesystem::path> inputs;
   std::filesystem::path output;
+  // Where the bricks, the resume store and the spill files go (empty: "<output>.work").
+  std::filesystem::path work_dir;
   // Objects of the layers of these names are left out of the package (the layer table keeps
   // them, empty).
   std::vector<std::string> exclude_layers;

@@ -11,7 +11,7 @@ packages=(
   libzstd-dev libxxhash-dev libmetis-dev libsqlite3-dev libcli11-dev nlohmann-json3-dev
   libstb-dev libtinygltf-dev libimgui-dev xvfb gnuplot-nox
   libocct-data-exchange-dev libocct-modeling-algorithms-dev libocct-ocaf-dev
-  libxml2-dev libxml2-utils libzip-dev ffmpeg
+  libxml2-dev libxml2-utils libzip-dev ffmpeg libopenmpi-dev openmpi-bin
   clang libclang-rt-14-dev
 )
 
