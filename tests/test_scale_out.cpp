@@ -56,7 +56,7 @@ bool sameBytes(const std::filesystem::path& a, const std::filesystem::path& b) {
 bool haveMpirun() { return std::system("command -v mpirun > /dev/null 2>&1") == 0; }
 
 std::string mpirun(int ranks) {
-  return "mpirun -np " + std::to_string(ranks) + " --oversubscribe --allow-run-as-root ";
+  return "mpirun -np " + std::to_string(ranks) + " --oversubscribe --allow-run-as-root --bind-to none ";
 }
 
 // The bricks a log names with `what` ("already built", or a number of triangles when built).
@@ -212,7 +212,7 @@ TEST(ScaleOut, AKilledRankLosesOnlyItsBrickAndTheSameCommandFinishes) {
   const auto dir = test::scratchDir();
   const auto out = dir / "mpi.twk";
   const std::vector<std::string> command = {
-      "mpirun", "-np", "2", "--oversubscribe", "--allow-run-as-root", TW_TERAWALK_EXE, "--quiet",
+      "mpirun", "-np", "2", "--oversubscribe", "--allow-run-as-root", "--bind-to", "none", TW_TERAWALK_EXE, "--quiet",
       "preprocess", "--mpi", fixture().scene.string(), "-o", out.string(), "--threads", "1",
       "--brick-triangles", "60000"};
   const auto first_log = dir / "first.log";

@@ -326,7 +326,7 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   cmd->add_option("inputs", args->inputs,
                   "Scene files (.tws, .ply, .obj, .stl, .gltf, .glb, .stp, .step, .ifc)")
       ->check(CLI::ExistingFile);
-  cmd->add_option("-o,--output", args->output, "Package to write (.twk)");
+  CLI::Option* output = cmd->add_option("-o,--output", args->output, "Package to write (.twk)");
   cmd->add_option("--threads", args->threads, "Worker threads (default: all cores)");
   cmd->add_flag("--resume", args->resume,
                 "Continue a killed run with the same arguments from its finished bricks");
@@ -339,11 +339,12 @@ void registerPreprocessCommand(CLI::App& app, const GlobalOptions& global) {
   registerPlanStep(cmd, global);
   registerBrickStep(cmd, global);
   registerMergeStep(cmd, global);
-  cmd->callback([cmd, args, &global] {
+  cmd->callback([cmd, output, args, &global] {
     if (!cmd->get_subcommands().empty()) return;  // a step ran
     if (args->inputs.empty())
       throw CLI::ValidationError("preprocess", "no input files (or a step: plan, brick, merge)");
-    if (args->output.empty()) throw CLI::ValidationError("preprocess", "-o names the package to write");
+    if (output->count() == 0)
+      throw CLI::ValidationError("preprocess", "-o names the package to write");
     auto progress = makeCommandProgress(global);
     PreprocessOptions options = buildOptions(*args);
     options.progress = progress.get();
