@@ -301,14 +301,19 @@ void validateOutput(const PreprocessOptions& options) {
                                 " is not writable: " + std::strerror(errno));
 }
 
-void validateOptions(const PreprocessOptions& options) {
+// What a plan needs (no package path yet).
+void validateBuildOptions(const PreprocessOptions& options) {
   if (options.inputs.empty()) throw std::invalid_argument("no input files");
-  validateOutput(options);
   if (options.parametric_cluster_size < 1 || options.parametric_cluster_size > 65536)
     throw std::invalid_argument("preprocess: parametric cluster size must be 1..65536");
   if (options.cluster_size < 64 || options.cluster_size > 4096)
     throw std::invalid_argument("cluster size must be between 64 and 4096 triangles");
   requireMemoryBudget(options.memory_budget_bytes, memoryNeed(0, 0, 0));
+}
+
+void validateOptions(const PreprocessOptions& options) {
+  validateBuildOptions(options);
+  validateOutput(options);
 }
 
 // The options of every stage, and the resume store keyed by the inputs and those options (a
@@ -855,7 +860,7 @@ PreprocessOptions stepOptions(const PreprocessPlan& plan, const StepOptions& ste
 
 PreprocessPlan planPreprocess(const PreprocessOptions& given) {
   PreprocessOptions options = given;
-  if (options.inputs.empty()) throw std::invalid_argument("no input files");
+  validateBuildOptions(options);
   if (options.work_dir.empty()) {
     if (options.output.empty())
       throw std::invalid_argument("preprocess plan: --work names the work directory");

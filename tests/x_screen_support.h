@@ -149,7 +149,11 @@ class XvfbScreen {
       server_.emplace(std::vector<std::string>{"Xvfb", display_, "-screen", "0",
                                                std::to_string(width) + "x" +
                                                    std::to_string(height) + "x24",
-                                               "-fbdir", dir.string(), "-nolisten", "tcp"},
+                                               "-fbdir", dir.string(), "-nolisten", "tcp",
+                                               // The pointer is drawn into the framebuffer, and
+                                               // not always the same: two captures of one still
+                                               // frame differed by its 72 pixels.
+                                               "-nocursor"},
                       std::vector<std::string>{}, dir / "xvfb.log");
       // Ready once the screen file holds a whole picture; a taken display makes Xvfb exit.
       for (int i = 0; i < 100 && server_->running() && !capture(); ++i)
