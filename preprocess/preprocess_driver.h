@@ -2,11 +2,12 @@
 // levels -> one package. This is the only stage that does I/O and owns the work directory; the
 // stages it calls are pure functions over buffers.
 //
-// Resume: the work directory "<output>.work" keeps the bricked scene and every finished brick's
-// DAG, keyed by a hash of the inputs (paths, sizes, modification times) and the options. With
-// `resume`, a run reuses what a killed run with the same arguments finished and writes a
+// Resume: the work directory ("<output>.work", or `work_dir`) keeps the bricked scene, its seams
+// and every finished brick's DAG, keyed by a hash of the inputs (paths, sizes, modification
+// times) and the options. With `resume`, a run reuses what a killed run with the same arguments finished and writes a
 // byte-identical package; without it the work directory is cleared first. It is removed after a
-// successful run.
+// successful run. The same stages also run as separate steps over a shared work directory
+// (preprocess_steps.h: plan, one job per brick, merge).
 //
 // Memory: one brick is built at a time; finished brick DAGs wait in the resume store (only their
 // roots, for the merge, stay in memory) and are re-read one at a time when packed; pages stream

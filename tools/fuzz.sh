@@ -16,7 +16,7 @@ seconds=${1:-15}
 shift || true
 targets=("$@")
 if [ ${#targets[@]} -eq 0 ]; then
-  targets=(ply obj stl gltf glb tws ifc step package camera_path bcf)
+  targets=(ply obj stl gltf glb tws ifc step package camera_path bcf preprocess_plan)
 fi
 build=${TERAWALK_FUZZ_BUILD_DIR:-build/fuzz}
 jobs=${TERAWALK_FUZZ_JOBS:-1}

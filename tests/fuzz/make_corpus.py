@@ -114,6 +114,21 @@ def camera_path_seeds():
         "0.5 7.0710678118654755 7.0710678118654755 2 225 -10 60\n1 0 10 2 270 -12.5 55\n")
 
 
+def preprocess_plan_seeds():
+    # What `preprocess plan` writes, with an excluded layer so every field has a value.
+    options = {"cad_conforming_bspline": True, "cad_primitives": True, "cad_tolerance_m": 0.0,
+               "cluster_size": 256, "database": "", "exclude_layers": ["hull"],
+               "inputs": ["/data/plant.tws"], "max_brick_triangles": 100000,
+               "memory_budget_bytes": 2147483648, "parametric_cluster_size": 64,
+               "parametric_occluders": True, "up": "auto", "view_cell_size_m": 0.0,
+               "visibility": True, "visibility_rays": 1024}
+    manifest = {"bricks": [{"index": 1, "triangles": 75935}, {"index": 0, "triangles": 63403}],
+                "format": "terawalk preprocess plan", "input_triangles": 495264,
+                "objects": 10940, "options": options, "primitives": 10889,
+                "run_hash": "5c1f0e2d9a8b7c6d", "version": 1}
+    put("preprocess_plan", "plant.json", json.dumps(manifest, indent=2) + "\n")
+
+
 BCF_MARKUP = """<?xml version="1.0" encoding="UTF-8"?>
 <Markup><Header><Files><File IfcProject="2SugUv4EX5LAhcVpDp2dUH"><Filename>a.ifc</Filename></File>
 </Files></Header><Topic Guid="11111111-2222-4333-8444-555555555555" TopicType="Issue"
@@ -188,6 +203,7 @@ if __name__ == "__main__":
     stl_seeds()
     gltf_seeds()
     camera_path_seeds()
+    preprocess_plan_seeds()
     bcf_seeds()
     if len(sys.argv) > 1:
         terawalk_seeds(os.path.abspath(sys.argv[1]))
