@@ -817,6 +817,17 @@ PreprocessReport PreprocessRun::finish() {
   return std::move(report_);
 }
 
+// From the bricks (built here, or found in the work directory) to the package: the stages a
+// one-process run and a merge share.
+PreprocessReport buildPackageFromBricks(PreprocessRun& run) {
+  run.buildBricks();
+  run.mergeUpperLevels();
+  run.pack();
+  run.write();
+  run.buildVisibility();
+  return run.finish();
+}
+
 }  // namespace
 
 PreprocessReport runPreprocess(const PreprocessOptions& options) {
@@ -825,12 +836,7 @@ PreprocessReport runPreprocess(const PreprocessOptions& options) {
     PreprocessRun run(options);
     run.brickInputs();
     run.findSeams();
-    run.buildBricks();
-    run.mergeUpperLevels();
-    run.pack();
-    run.write();
-    run.buildVisibility();
-    return run.finish();
+    return buildPackageFromBricks(run);
   } catch (...) {
     // A failed run leaves nothing behind: its work folder (up to several times the package)
     // would keep a full disk full. A cancelled run keeps its finished bricks for --resume, and
@@ -918,12 +924,7 @@ PreprocessReport mergePreprocess(const PreprocessPlan& plan, const StepOptions& 
   run.brickInputs();
   run.requireBuiltBricks();
   run.findSeams();
-  run.buildBricks();
-  run.mergeUpperLevels();
-  run.pack();
-  run.write();
-  run.buildVisibility();
-  return run.finish();
+  return buildPackageFromBricks(run);
 }
 
 }  // namespace tw

@@ -34,7 +34,9 @@ struct BrickJobReport {
   uint64_t triangles = 0;
   uint64_t clusters = 0;
   double seconds = 0.0;
-  uint64_t peak_rss_bytes = 0;  // the process's high-water mark over this job alone
+  // The process's resident high-water mark from the job's start (reset then to what the process
+  // held, so a rank that built bricks before reports at least that).
+  uint64_t peak_rss_bytes = 0;
 };
 
 // 2. The brick jobs of a plan: the bricking and seams are read once, then any brick is built.
